@@ -1,0 +1,30 @@
+#include "uhaptics/tools/reproduction.hpp"
+
+#include <catch2/catch.hpp>
+#include <cmath>
+#include <cstdio>
+
+using uhaptics::tools::ReproductionTable;
+
+TEST_CASE("reproduction tables decide pass/fail and round-trip through CSV") {
+  ReproductionTable t;
+  t.addWithin("003", "K at home", 123.0, 123.4, 0.5, "-");
+  t.addWithin("003", "zeta, at home", 3.3, 3.9, 0.05, "-");
+  t.addBound("001", "max penetration", 0.8, "< 1 mm", true, "mm");
+  t.addBound("001", "broken", std::nan(""), "< 1", true, "mm");
+  REQUIRE(t.rows().size() == 4);
+  CHECK(t.rows()[0].pass);
+  CHECK_FALSE(t.rows()[1].pass);
+  CHECK(t.rows()[2].pass);
+  CHECK_FALSE(t.rows()[3].pass);  // a NaN measurement never passes
+  CHECK_FALSE(t.allPass());
+  const std::string path = "reproduction_table_test.csv";
+  t.writeCsv(path);
+  const auto back = ReproductionTable::readCsv(path);
+  std::remove(path.c_str());
+  REQUIRE(back.rows().size() == 4);
+  CHECK(back.rows()[1].quantity == "zeta, at home");
+  CHECK(back.rows()[0].measured == Approx(123.4));
+  CHECK(back.rows()[1].pass == false);
+  CHECK(t.format().find("FAIL") != std::string::npos);
+}
