@@ -1,0 +1,48 @@
+#pragma once
+// Which device and backend a CHAI3D application gets, chosen without touching its code: from the
+// environment, optionally from a JSON file, environment winning.
+//
+//   UHAPTICS_DEVICE   device name (e.g. exo, tau, rhi); required unless the config file names one
+//   UHAPTICS_BACKEND  sim (default) or usb
+//   UHAPTICS_CONFIG   path of a JSON file (format below)
+//   UHAPTICS_STATS    where the device writes its session statistics (default: none)
+//   UHAPTICS_HAND     on (default with sim) / off: the scripted hand that moves the simulated device
+//
+// Config file ("device": "chai3d-selection", "format_version": 1):
+//   {"selection": {"device": "tau", "backend": "sim"}, "stats": "/tmp/tau.json",
+//    "hand": {"enabled": 1, "lap_time": 4, "stiffness": 150, "damping": 4, "max_force": 8,
+//             "waypoint_count": 2, "waypoints": [0,0,0.5, 0,0,-0.3]},
+//    "options": {"<device>": {"<option>": value, ...}}}  (device-specific renderer options)
+#include <functional>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "uhaptics/backends/scripted_hand.hpp"
+#include "uhaptics/models/param_file.hpp"
+
+namespace uhaptics {
+
+struct DeviceSelection {
+  std::string device;
+  std::string backend = "sim";
+  std::string stats_path;        // empty: no stats file
+  bool hand_enabled = true;      // only meaningful with the sim backend
+  ScriptedHandOptions hand;
+  std::optional<ParamFile> config;  // for device-specific options ("options/<device>/<name>")
+
+  /// A device option from the config file, fallback when absent; validated against [lo, hi].
+  double option(const std::string& name, double fallback, double lo, double hi) const;
+};
+
+/// Environment lookup, injectable for tests (std::getenv semantics: nullptr when unset).
+using EnvironmentLookup = std::function<const char*(const char*)>;
+
+/// Reads and validates the selection. Throws uhaptics::Error whose message names the variable or
+/// file field, the value, and the valid choices. devices/backends: what this build offers.
+DeviceSelection readDeviceSelection(const std::vector<std::string>& devices,
+                                    const std::vector<std::string>& backends,
+                                    const EnvironmentLookup& environment);
+
+}  // namespace uhaptics

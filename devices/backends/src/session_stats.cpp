@@ -1,0 +1,105 @@
+#include "uhaptics/backends/session_stats.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <sstream>
+
+#include "uhaptics/core/fault.hpp"
+
+namespace uhaptics {
+
+void SessionStats::start(double wall_time) noexcept {
+  in_contact_ = false;
+  start_time_.store(wall_time);
+  ticks_.store(0);
+  contacts_.store(0);
+  contact_ticks_.store(0);
+  faults_.store(0);
+  peak_force_.store(0.0);
+  peak_output_.store(0.0);
+}
+
+void SessionStats::recordTick(double commanded_force, double output_magnitude, bool fault) noexcept {
+  ticks_.fetch_add(1, std::memory_order_relaxed);
+  if (fault) faults_.fetch_add(1, std::memory_order_relaxed);
+  if (!std::isfinite(commanded_force)) return;  // counted as a fault by the caller
+  if (!in_contact_ && commanded_force > threshold_) {
+    in_contact_ = true;
+    contacts_.fetch_add(1, std::memory_order_relaxed);
+  } else if (in_contact_ && commanded_force < 0.5 * threshold_) {
+    in_contact_ = false;
+  }
+  if (in_contact_) contact_ticks_.fetch_add(1, std::memory_order_relaxed);
+  // Single writer: plain load/store keeps the maxima exact without a compare-exchange loop.
+  if (commanded_force > peak_force_.load(std::memory_order_relaxed)) {
+    peak_force_.store(commanded_force, std::memory_order_relaxed);
+  }
+  if (std::isfinite(output_magnitude) && output_magnitude > peak_output_.load(std::memory_order_relaxed)) {
+    peak_output_.store(output_magnitude, std::memory_order_relaxed);
+  }
+}
+
+SessionStatsSnapshot SessionStats::snapshot(double wall_time) const noexcept {
+  SessionStatsSnapshot s;
+  s.ticks = ticks_.load();
+  s.seconds = std::max(0.0, wall_time - start_time_.load());
+  s.rate_hz = s.seconds > 0.0 ? static_cast<double>(s.ticks) / s.seconds : 0.0;
+  s.contacts = contacts_.load();
+  s.contact_ticks = contact_ticks_.load();
+  s.peak_force = peak_force_.load();
+  s.peak_output = peak_output_.load();
+  s.faults = faults_.load();
+  return s;
+}
+
+namespace {
+
+// Labels come from our own configuration, but a path or a user-supplied name may contain quotes.
+std::string quoted(const std::string& text) {
+  std::string out = "\"";
+  for (const char c : text) {
+    if (c == '"' || c == '\\') out += '\\';
+    if (static_cast<unsigned char>(c) >= 0x20) out += c;
+  }
+  return out + "\"";
+}
+
+}  // namespace
+
+std::string formatStatsJson(const SessionStatsSnapshot& stats, const std::string& device,
+                            const std::string& backend, const std::string& renderer) {
+  std::ostringstream out;
+  out.precision(9);
+  out << "{\n"
+      << "  \"device\": " << quoted(device) << ",\n"
+      << "  \"backend\": " << quoted(backend) << ",\n"
+      << "  \"renderer\": " << quoted(renderer) << ",\n"
+      << "  \"ticks\": " << stats.ticks << ",\n"
+      << "  \"seconds\": " << stats.seconds << ",\n"
+      << "  \"rate_hz\": " << stats.rate_hz << ",\n"
+      << "  \"contacts\": " << stats.contacts << ",\n"
+      << "  \"contact_ticks\": " << stats.contact_ticks << ",\n"
+      << "  \"peak_force_N\": " << stats.peak_force << ",\n"
+      << "  \"peak_output\": " << stats.peak_output << ",\n"
+      << "  \"faults\": " << stats.faults << "\n"
+      << "}\n";
+  return out.str();
+}
+
+void writeFileAtomically(const std::string& path, const std::string& text) {
+  const std::string temporary = path + ".tmp";
+  {
+    std::ofstream file(temporary, std::ios::trunc);
+    file << text;
+    file.flush();
+    if (!file) throw Error("cannot write " + temporary);
+  }
+  if (std::rename(temporary.c_str(), path.c_str()) != 0) {
+    std::remove(temporary.c_str());
+    throw Error("cannot rename " + temporary + " to " + path);
+  }
+}
+
+}  // namespace uhaptics

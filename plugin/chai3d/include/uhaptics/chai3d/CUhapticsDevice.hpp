@@ -1,0 +1,141 @@
+#pragma once
+// chai3d::cUhapticsDevice: the part every uhaptics device shares when it is driven by CHAI3D.
+//
+// CHAI3D hands the device a Cartesian force/torque in the device frame (x toward the operator, y to
+// the right, z up; N, N m) from whatever thread runs the application's haptic loop, at whatever
+// rate that loop spins. This class turns that into fixed-period servo ticks of the device's own
+// renderer (the subclass), holds the last command between ticks as hardware does, drives the
+// simulated backend with a scripted hand, and keeps session statistics (optionally written to a
+// file every half second and on close, so even a killed process leaves a recent record).
+//
+// Time: in real-time mode (default) the number of servo ticks follows the wall clock, whatever the
+// application's loop rate (at most kMaxCatchUpTicks per call: a stalled loop does not trigger a burst
+// of simulation). In lock-step mode every setForceAndTorqueAndGripperForce() call is exactly one
+// servo tick: deterministic, for tests.
+//
+// Subclasses implement the device: its specification (in the constructor), its backend and its
+// rendering method (the protected hooks). All hooks run with the device mutex held.
+#include <atomic>
+#include <chrono>
+#include <condition_variable>
+#include <memory>
+#include <mutex>
+#include <string>
+#include <thread>
+
+#include "system/CGlobals.h"  // must precede device headers (CHAI3D's feature switches)
+#include "devices/CGenericHapticDevice.h"
+
+#include "uhaptics/backends/device_selection.hpp"
+#include "uhaptics/backends/scripted_hand.hpp"
+#include "uhaptics/backends/session_stats.hpp"
+#include "uhaptics/core/fault.hpp"
+#include "uhaptics/core/types.hpp"
+
+namespace chai3d {
+
+class cUhapticsDevice;
+typedef std::shared_ptr<cUhapticsDevice> cUhapticsDevicePtr;
+
+class cUhapticsDevice : public cGenericHapticDevice {
+ public:
+  static constexpr int kMaxCatchUpTicks = 50;
+
+  virtual ~cUhapticsDevice();
+  cUhapticsDevice(const cUhapticsDevice&) = delete;
+  cUhapticsDevice& operator=(const cUhapticsDevice&) = delete;
+
+  // ---- CHAI3D's device contract -------------------------------------------------------------
+  virtual bool open();
+  virtual bool close();
+  virtual bool calibrate(bool a_forceCalibration = false);
+  virtual bool getPosition(cVector3d& a_position);
+  virtual bool getRotation(cMatrix3d& a_rotation);
+  virtual bool getLinearVelocity(cVector3d& a_linearVelocity);
+  virtual bool getAngularVelocity(cVector3d& a_angularVelocity);
+  virtual bool getJointAnglesRad(double a_jointAnglesRad[C_MAX_DOF]);
+  /// None of the uhaptics devices has a gripper: angle and angular velocity are 0.
+  virtual bool getGripperAngleRad(double& a_angle);
+  virtual bool getGripperAngularVelocity(double& a_gripperAngularVelocity);
+  /// The simulated devices have no buttons: always 0.
+  virtual bool getUserSwitches(unsigned int& a_userSwitches);
+  virtual bool setForceAndTorqueAndGripperForce(const cVector3d& a_force, const cVector3d& a_torque,
+                                                double a_gripperForce);
+  virtual bool enableForces(bool a_value);
+
+  // ---- uhaptics extras ----------------------------------------------------------------------
+  /// Lock-step: each setForceAndTorqueAndGripperForce() call is one servo tick (deterministic).
+  void setLockStep(bool a_lockStep);
+  bool getLockStep() const { return m_lockStep; }
+  double getServoPeriod() const { return m_servoPeriod; }
+  /// Simulated time [s] = servo ticks x period.
+  double getSimulationTime();
+  /// Replaces the scripted hand (throws uhaptics::Error on invalid options); sim backend only.
+  void setScriptedHand(const uhaptics::ScriptedHandOptions& a_options);
+  void setScriptedHandEnabled(bool a_enabled);
+  bool getScriptedHandEnabled() const { return m_handEnabled; }
+  /// Where to write the statistics (empty: nowhere). Only while closed; used from the next open().
+  void setStatsFile(const std::string& a_path);
+  uhaptics::SessionStatsSnapshot getSessionStats() const;
+  /// The last tick's fault (kNone when the last command went out as computed).
+  uhaptics::Fault getLastFault();
+  const std::string& getDeviceName() const { return m_selection.device; }
+  const std::string& getBackendName() const { return m_selection.backend; }
+  /// Name of the rendering method now in use (may change at run time, e.g. TAU's wall).
+  virtual std::string getRendererName() const = 0;
+
+ protected:
+  /// a_servoPeriod [s]: the device's control period (its board's rate).
+  cUhapticsDevice(unsigned int a_deviceNumber, const uhaptics::DeviceSelection& a_selection,
+                  double a_servoPeriod);
+
+  /// Sets up and starts the backend; throws uhaptics::Error with a message when it cannot.
+  virtual void startBackend() = 0;
+  /// Leaves the device with a zero command and releases the backend. Must not throw.
+  virtual void stopBackend() noexcept = 0;
+  /// One servo period: render the application's force/torque (device frame) through the device's
+  /// method, apply the scripted hand's force (zero when there is none) and advance dt. Returns the
+  /// fault (zero command sent) and the largest actuator command magnitude in a_outputMagnitude.
+  virtual uhaptics::Fault servoTick(const uhaptics::Vec3& a_force, const uhaptics::Vec3& a_torque,
+                                    const uhaptics::Vec3& a_handForce, double a_dt,
+                                    double& a_outputMagnitude) noexcept = 0;
+  /// State in CHAI3D's device frame, origin at the workspace centre.
+  virtual void readState(uhaptics::Vec3& a_position, uhaptics::Mat3& a_rotation,
+                         uhaptics::Vec3& a_linearVelocity, uhaptics::Vec3& a_angularVelocity) noexcept = 0;
+  /// Joint angles (actuated and sensed) [rad or m for prismatic joints]; returns how many.
+  virtual int readJointAngles(double a_q[C_MAX_DOF]) noexcept = 0;
+
+  /// Fills the fields every uhaptics device shares (manufacturer, no gripper, no switches).
+  void setCommonSpecifications(const std::string& a_modelName);
+
+  uhaptics::DeviceSelection m_selection;
+
+ private:
+  using Clock = std::chrono::steady_clock;
+  void advanceLocked(bool a_oneTick) noexcept;
+  void tickLocked() noexcept;
+  double wallTime() const noexcept;
+  void startStatsWriter();
+  void stopStatsWriter() noexcept;
+  void writeStats(const std::string& a_path) noexcept;
+
+  std::mutex m_mutex;  // the application may call from its haptic and its graphics threads
+  const double m_servoPeriod;
+  bool m_lockStep = false;
+  bool m_forcesEnabled = true;
+  bool m_handEnabled;
+  std::unique_ptr<uhaptics::ScriptedHand> m_hand;
+  uhaptics::Vec3 m_commandForce = uhaptics::Vec3::Zero();
+  uhaptics::Vec3 m_commandTorque = uhaptics::Vec3::Zero();
+  std::uint64_t m_ticks = 0;
+  Clock::time_point m_origin;
+  uhaptics::Fault m_lastFault = uhaptics::Fault::kNone;
+  uhaptics::SessionStats m_stats;
+  std::string m_statsPath;
+  std::thread m_statsWriter;
+  std::mutex m_writerMutex;
+  std::condition_variable m_writerWake;
+  bool m_writerStop = false;
+};
+
+}  // namespace chai3d

@@ -1,0 +1,283 @@
+#include "uhaptics/chai3d/CUhapticsDevice.hpp"
+
+#include <cmath>
+#include <cstdio>
+
+namespace chai3d {
+namespace {
+
+uhaptics::Vec3 toEigen(const cVector3d& v) { return uhaptics::Vec3(v(0), v(1), v(2)); }
+cVector3d toChai(const uhaptics::Vec3& v) { return cVector3d(v(0), v(1), v(2)); }
+
+}  // namespace
+
+cUhapticsDevice::cUhapticsDevice(unsigned int a_deviceNumber, const uhaptics::DeviceSelection& a_selection,
+                                 double a_servoPeriod)
+    : cGenericHapticDevice(a_deviceNumber),
+      m_selection(a_selection),
+      m_servoPeriod(a_servoPeriod),
+      m_handEnabled(a_selection.hand_enabled && a_selection.backend == "sim"),
+      m_statsPath(a_selection.stats_path) {
+  if (!(a_servoPeriod > 0.0) || !std::isfinite(a_servoPeriod)) {
+    throw uhaptics::Error("servo period must be finite and > 0");
+  }
+  m_deviceNumber = static_cast<int>(a_deviceNumber);  // cGenericDevice ignores its argument
+  m_deviceAvailable = true;
+  m_deviceReady = false;
+  m_hand = std::make_unique<uhaptics::ScriptedHand>(a_selection.hand, 1.0, uhaptics::Vec3::Zero());
+}
+
+cUhapticsDevice::~cUhapticsDevice() { stopStatsWriter(); }
+
+void cUhapticsDevice::setCommonSpecifications(const std::string& a_modelName) {
+  m_specifications.m_model = C_HAPTIC_DEVICE_CUSTOM;
+  m_specifications.m_modelName = a_modelName + " (uhaptics, " + m_selection.backend + ")";
+  m_specifications.m_manufacturerName = "uhaptics";
+  m_specifications.m_maxGripperForce = 0.0;
+  m_specifications.m_maxGripperLinearStiffness = 0.0;
+  m_specifications.m_maxGripperAngularDamping = 0.0;
+  m_specifications.m_gripperMaxAngleRad = 0.0;
+  m_specifications.m_sensedGripper = false;
+  m_specifications.m_actuatedGripper = false;
+}
+
+double cUhapticsDevice::wallTime() const noexcept {
+  return std::chrono::duration<double>(Clock::now().time_since_epoch()).count();
+}
+
+bool cUhapticsDevice::open() {
+  std::lock_guard<std::mutex> lock(m_mutex);
+  if (m_deviceReady) return C_SUCCESS;
+  try {
+    // The scripted hand's path is in workspace radii: scale it to this device now that the
+    // subclass has filled in its specification.
+    m_hand = std::make_unique<uhaptics::ScriptedHand>(m_hand->options(), m_specifications.m_workspaceRadius,
+                                                      uhaptics::Vec3::Zero());
+    startBackend();
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "uhaptics: cannot open device '%s' (backend %s): %s\n", m_selection.device.c_str(),
+                 m_selection.backend.c_str(), e.what());
+    return C_ERROR;
+  }
+  m_commandForce.setZero();
+  m_commandTorque.setZero();
+  m_ticks = 0;
+  m_lastFault = uhaptics::Fault::kNone;
+  m_origin = Clock::now();
+  m_stats.start(wallTime());
+  m_deviceReady = true;
+  startStatsWriter();
+  return C_SUCCESS;
+}
+
+bool cUhapticsDevice::close() {
+  {
+    std::lock_guard<std::mutex> lock(m_mutex);
+    if (!m_deviceReady) return C_SUCCESS;
+    m_deviceReady = false;
+    stopBackend();
+  }
+  stopStatsWriter();
+  writeStats(m_statsPath);
+  return C_SUCCESS;
+}
+
+bool cUhapticsDevice::calibrate(bool) { return m_deviceReady; }
+
+void cUhapticsDevice::setLockStep(bool a_lockStep) {
+  std::lock_guard<std::mutex> lock(m_mutex);
+  m_lockStep = a_lockStep;
+}
+
+double cUhapticsDevice::getSimulationTime() {
+  std::lock_guard<std::mutex> lock(m_mutex);
+  return static_cast<double>(m_ticks) * m_servoPeriod;
+}
+
+void cUhapticsDevice::setScriptedHand(const uhaptics::ScriptedHandOptions& a_options) {
+  auto hand = std::make_unique<uhaptics::ScriptedHand>(a_options, m_specifications.m_workspaceRadius,
+                                                       uhaptics::Vec3::Zero());
+  std::lock_guard<std::mutex> lock(m_mutex);
+  m_hand = std::move(hand);
+}
+
+void cUhapticsDevice::setScriptedHandEnabled(bool a_enabled) {
+  std::lock_guard<std::mutex> lock(m_mutex);
+  m_handEnabled = a_enabled && m_selection.backend == "sim";
+}
+
+void cUhapticsDevice::setStatsFile(const std::string& a_path) {
+  std::lock_guard<std::mutex> lock(m_mutex);
+  if (m_deviceReady) return;  // the writer thread owns its copy until close()
+  m_statsPath = a_path;
+}
+
+uhaptics::SessionStatsSnapshot cUhapticsDevice::getSessionStats() const { return m_stats.snapshot(wallTime()); }
+
+uhaptics::Fault cUhapticsDevice::getLastFault() {
+  std::lock_guard<std::mutex> lock(m_mutex);
+  return m_lastFault;
+}
+
+void cUhapticsDevice::tickLocked() noexcept {
+  uhaptics::Vec3 position, linear, angular;
+  uhaptics::Mat3 rotation;
+  readState(position, rotation, linear, angular);
+  const double t = static_cast<double>(m_ticks) * m_servoPeriod;
+  const uhaptics::Vec3 hand = m_handEnabled ? m_hand->force(t, position, linear) : uhaptics::Vec3::Zero();
+  const uhaptics::Vec3 zero = uhaptics::Vec3::Zero();
+  const bool sendForce = m_forcesEnabled;
+  double output = 0.0;
+  m_lastFault = servoTick(sendForce ? m_commandForce : zero, sendForce ? m_commandTorque : zero, hand,
+                          m_servoPeriod, output);
+  ++m_ticks;
+  m_stats.recordTick(sendForce ? m_commandForce.norm() : 0.0, output, m_lastFault != uhaptics::Fault::kNone);
+}
+
+void cUhapticsDevice::advanceLocked(bool a_oneTick) noexcept {
+  if (!m_deviceReady) return;
+  if (a_oneTick) {
+    tickLocked();
+    return;
+  }
+  const double elapsed = std::chrono::duration<double>(Clock::now() - m_origin).count();
+  const auto due = static_cast<std::uint64_t>(elapsed / m_servoPeriod);
+  if (due <= m_ticks) return;  // the application's loop runs faster than the servo: hold
+  std::uint64_t missing = due - m_ticks;
+  if (missing > static_cast<std::uint64_t>(kMaxCatchUpTicks)) {
+    // The application stalled (a debugger, a descheduled thread): resume from now instead of
+    // replaying the gap at once. Moving the origin keeps simulated time continuous.
+    m_origin += std::chrono::duration_cast<Clock::duration>(
+        std::chrono::duration<double>(static_cast<double>(missing - kMaxCatchUpTicks) * m_servoPeriod));
+    missing = kMaxCatchUpTicks;
+  }
+  for (std::uint64_t i = 0; i < missing; ++i) tickLocked();
+}
+
+bool cUhapticsDevice::getPosition(cVector3d& a_position) {
+  std::lock_guard<std::mutex> lock(m_mutex);
+  if (!m_lockStep) advanceLocked(false);  // a read-only application still sees the hand move it
+  uhaptics::Vec3 position, linear, angular;
+  uhaptics::Mat3 rotation;
+  readState(position, rotation, linear, angular);
+  a_position = toChai(position);
+  m_linearVelocity = toChai(linear);
+  return m_deviceReady;
+}
+
+bool cUhapticsDevice::getRotation(cMatrix3d& a_rotation) {
+  std::lock_guard<std::mutex> lock(m_mutex);
+  uhaptics::Vec3 position, linear, angular;
+  uhaptics::Mat3 rotation;
+  readState(position, rotation, linear, angular);
+  a_rotation.set(rotation(0, 0), rotation(0, 1), rotation(0, 2), rotation(1, 0), rotation(1, 1), rotation(1, 2),
+                 rotation(2, 0), rotation(2, 1), rotation(2, 2));
+  m_angularVelocity = toChai(angular);
+  return m_deviceReady;
+}
+
+bool cUhapticsDevice::getLinearVelocity(cVector3d& a_linearVelocity) {
+  // The simulated state (or the board) knows the velocity: no finite-difference estimate needed.
+  std::lock_guard<std::mutex> lock(m_mutex);
+  uhaptics::Vec3 position, linear, angular;
+  uhaptics::Mat3 rotation;
+  readState(position, rotation, linear, angular);
+  a_linearVelocity = m_linearVelocity = toChai(linear);
+  return m_deviceReady;
+}
+
+bool cUhapticsDevice::getAngularVelocity(cVector3d& a_angularVelocity) {
+  std::lock_guard<std::mutex> lock(m_mutex);
+  uhaptics::Vec3 position, linear, angular;
+  uhaptics::Mat3 rotation;
+  readState(position, rotation, linear, angular);
+  a_angularVelocity = m_angularVelocity = toChai(angular);
+  return m_deviceReady;
+}
+
+bool cUhapticsDevice::getJointAnglesRad(double a_jointAnglesRad[C_MAX_DOF]) {
+  std::lock_guard<std::mutex> lock(m_mutex);
+  for (int i = 0; i < C_MAX_DOF; ++i) a_jointAnglesRad[i] = 0.0;
+  readJointAngles(a_jointAnglesRad);
+  return m_deviceReady;
+}
+
+bool cUhapticsDevice::getGripperAngleRad(double& a_angle) {
+  a_angle = 0.0;
+  return m_deviceReady;
+}
+
+bool cUhapticsDevice::getGripperAngularVelocity(double& a_gripperAngularVelocity) {
+  a_gripperAngularVelocity = 0.0;
+  return m_deviceReady;
+}
+
+bool cUhapticsDevice::getUserSwitches(unsigned int& a_userSwitches) {
+  a_userSwitches = 0;
+  return m_deviceReady;
+}
+
+bool cUhapticsDevice::setForceAndTorqueAndGripperForce(const cVector3d& a_force, const cVector3d& a_torque,
+                                                       double a_gripperForce) {
+  std::lock_guard<std::mutex> lock(m_mutex);
+  if (!m_deviceReady) return C_ERROR;
+  m_commandForce = toEigen(a_force);
+  m_commandTorque = toEigen(a_torque);
+  if (!m_commandForce.allFinite() || !m_commandTorque.allFinite()) {
+    // A broken scene must not move the device: zero command; the device reports the fault.
+    m_commandForce.setZero();
+    m_commandTorque.setZero();
+    m_lastFault = uhaptics::Fault::kNonFiniteInput;
+    m_stats.recordFault();
+    return C_ERROR;
+  }
+  m_prevForce = a_force;
+  m_prevTorque = a_torque;
+  m_prevGripperForce = a_gripperForce;
+  advanceLocked(m_lockStep);
+  return m_deviceReady;
+}
+
+bool cUhapticsDevice::enableForces(bool a_value) {
+  std::lock_guard<std::mutex> lock(m_mutex);
+  m_forcesEnabled = a_value;
+  return C_SUCCESS;
+}
+
+void cUhapticsDevice::startStatsWriter() {
+  if (m_statsPath.empty()) return;
+  const std::string path = m_statsPath;  // the writer never reads members the app may change
+  {
+    std::lock_guard<std::mutex> lock(m_writerMutex);
+    m_writerStop = false;
+  }
+  m_statsWriter = std::thread([this, path] {
+    std::unique_lock<std::mutex> lock(m_writerMutex);
+    while (!m_writerWake.wait_for(lock, std::chrono::milliseconds(500), [this] { return m_writerStop; })) {
+      lock.unlock();
+      writeStats(path);
+      lock.lock();
+    }
+  });
+}
+
+void cUhapticsDevice::stopStatsWriter() noexcept {
+  {
+    std::lock_guard<std::mutex> lock(m_writerMutex);
+    m_writerStop = true;
+  }
+  m_writerWake.notify_all();
+  if (m_statsWriter.joinable()) m_statsWriter.join();
+}
+
+void cUhapticsDevice::writeStats(const std::string& a_path) noexcept {
+  if (a_path.empty()) return;
+  try {
+    uhaptics::writeFileAtomically(a_path, uhaptics::formatStatsJson(getSessionStats(), m_selection.device,
+                                                                         m_selection.backend, getRendererName()));
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "uhaptics: %s\n", e.what());
+  }
+}
+
+}  // namespace chai3d

@@ -1,0 +1,56 @@
+// Session statistics: contact episodes with hysteresis, peaks, faults, the JSON file.
+#include <catch2/catch.hpp>
+#include <cstdio>
+#include <fstream>
+#include <sstream>
+
+#include "uhaptics/backends/session_stats.hpp"
+#include "uhaptics/core/fault.hpp"
+#include "uhaptics/tools/alloc_probe.hpp"
+
+using uhaptics::SessionStats;
+
+TEST_CASE("session stats count contact episodes, not ticks above the threshold", "[chai3d][stats]") {
+  SessionStats stats(1.0);
+  stats.start(10.0);
+  // Ripple around the threshold (0.7..1.2 N) is one contact: it must fall below 0.5 N to end.
+  for (const double f : {0.0, 1.2, 0.7, 1.1, 0.8, 0.4, 0.0, 2.5, 0.1}) stats.recordTick(f, 10.0 * f, false);
+  stats.recordTick(0.0, 0.0, true);
+  stats.recordFault();
+  const auto s = stats.snapshot(12.0);
+  CHECK(s.ticks == 10);
+  CHECK(s.contacts == 2);
+  CHECK(s.contact_ticks == 5);  // 1.2 0.7 1.1 0.8 | 2.5
+  CHECK(s.peak_force == 2.5);
+  CHECK(s.peak_output == 25.0);
+  CHECK(s.faults == 2);
+  CHECK(s.seconds == 2.0);
+  CHECK(s.rate_hz == 5.0);
+}
+
+TEST_CASE("recording a tick allocates nothing", "[chai3d][stats]") {
+  SessionStats stats;
+  stats.start(0.0);
+  uhaptics::tools::AllocationScope scope;
+  for (int i = 0; i < 1000; ++i) stats.recordTick(0.001 * i, 1.0, false);
+  CHECK(scope.count() == 0);
+}
+
+TEST_CASE("stats file is complete JSON written atomically", "[chai3d][stats]") {
+  SessionStats stats;
+  stats.start(0.0);
+  stats.recordTick(3.0, 1.5, false);
+  const std::string path = "uhaptics-chai3d-stats-test.json";
+  uhaptics::writeFileAtomically(path, uhaptics::formatStatsJson(stats.snapshot(1.0), "exo", "sim", "subspace \"proxy\""));
+  std::ifstream file(path);
+  std::stringstream text;
+  text << file.rdbuf();
+  CHECK_THAT(text.str(), Catch::Contains("\"device\": \"exo\""));
+  CHECK_THAT(text.str(), Catch::Contains("\"renderer\": \"subspace \\\"proxy\\\"\""));
+  CHECK_THAT(text.str(), Catch::Contains("\"ticks\": 1,"));
+  CHECK_THAT(text.str(), Catch::Contains("\"contacts\": 1,"));
+  CHECK_THAT(text.str(), Catch::Contains("\"peak_force_N\": 3,"));
+  CHECK(!std::ifstream(path + ".tmp").good());  // the temporary was renamed away
+  std::remove(path.c_str());
+  CHECK_THROWS_AS(uhaptics::writeFileAtomically("/nonexistent-dir/x.json", "{}"), uhaptics::Error);
+}

@@ -1,0 +1,214 @@
+// cUhapticsDevice around a fixture device: the CHAI3D contract, the clock, the scripted hand, the
+// statistics, and the full CHAI3D pipeline (world + stock cToolCursor + mesh) without graphics.
+#include <catch2/catch.hpp>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <sstream>
+#include <thread>
+
+#include "chai3d.h"
+#include "point_mass_device.hpp"
+#include "uhaptics/tools/alloc_probe.hpp"
+
+using namespace chai3d;
+
+namespace {
+
+uhaptics::DeviceSelection fixtureSelection() {
+  uhaptics::DeviceSelection s;
+  s.device = "pointmass";
+  return s;
+}
+
+}  // namespace
+
+TEST_CASE("device contract before and after open", "[chai3d_adapters][device]") {
+  auto device = std::make_shared<PointMassDevice>(fixtureSelection());
+  cGenericHapticDevicePtr generic = device;
+  CHECK(device->isDeviceAvailable());
+  CHECK_FALSE(device->isDeviceReady());
+  CHECK(generic->setForce(cVector3d(1, 0, 0)) == C_ERROR);  // not open: refused
+  REQUIRE(generic->open());
+  CHECK(generic->calibrate());
+  cVector3d p, v;
+  cMatrix3d r;
+  double gripper = 1.0;
+  unsigned int switches = 7;
+  CHECK(generic->getPosition(p));
+  CHECK(generic->getRotation(r));
+  CHECK(generic->getLinearVelocity(v));
+  CHECK(generic->getGripperAngleRad(gripper));
+  CHECK(generic->getUserSwitches(switches));
+  CHECK(gripper == 0.0);
+  CHECK(switches == 0u);
+  double q[C_MAX_DOF];
+  CHECK(generic->getJointAnglesRad(q));
+  const cHapticDeviceInfo info = generic->getSpecifications();
+  CHECK(info.m_model == C_HAPTIC_DEVICE_CUSTOM);
+  CHECK(info.m_manufacturerName == "uhaptics");
+  CHECK_THAT(info.m_modelName, Catch::Contains("point mass") && Catch::Contains("sim"));
+  CHECK(generic->close());
+  CHECK_FALSE(device->isDeviceReady());
+}
+
+TEST_CASE("forces flow: in lock-step each command is one servo tick of the device", "[chai3d_adapters][device]") {
+  auto selection = fixtureSelection();
+  selection.hand_enabled = false;
+  PointMassDevice device(selection);
+  device.setLockStep(true);
+  REQUIRE(device.open());
+  for (int i = 0; i < 100; ++i) REQUIRE(device.setForce(cVector3d(0.0, 0.0, 1.0)));
+  CHECK(device.getSimulationTime() == Approx(0.1));
+  // Closed form of m v' = F - b v from rest: v(t) = F/b (1 - exp(-b t / m)); semi-implicit Euler
+  // at 1 ms differs from it by O(dt b/m) = 1 % relative.
+  cVector3d v;
+  device.getLinearVelocity(v);
+  const double exact = 1.0 / PointMassDevice::kFriction * (1.0 - std::exp(-PointMassDevice::kFriction * 0.1 / PointMassDevice::kMass));
+  CHECK(v.z() == Approx(exact).epsilon(0.02));
+  CHECK(device.getForce(v));
+  CHECK(v.z() == 1.0);  // getForce() reports the last command, as CHAI3D's devices do
+  const auto stats = device.getSessionStats();
+  CHECK(stats.ticks == 100);
+  CHECK(stats.contacts == 1);
+  CHECK(stats.peak_force == 1.0);
+}
+
+TEST_CASE("non-finite commands are refused with a fault and a zero command", "[chai3d_adapters][device]") {
+  auto selection = fixtureSelection();
+  selection.hand_enabled = false;
+  PointMassDevice device(selection);
+  device.setLockStep(true);
+  REQUIRE(device.open());
+  CHECK(device.setForce(cVector3d(NAN, 0.0, 0.0)) == C_ERROR);
+  CHECK(device.getLastFault() == uhaptics::Fault::kNonFiniteInput);
+  CHECK(device.setForceAndTorque(cVector3d(0, 0, 0), cVector3d(INFINITY, 0, 0)) == C_ERROR);
+  REQUIRE(device.setForce(cVector3d(0.0, 0.0, 20.0)));  // beyond the fixture's 10 N: saturated
+  CHECK(device.last_actuator_.z() == 10.0);
+  CHECK(device.getSessionStats().faults == 2);
+  CHECK(device.position_.allFinite());
+}
+
+TEST_CASE("a servo tick through the CHAI3D call allocates nothing", "[chai3d_adapters][device]") {
+  PointMassDevice device(fixtureSelection());
+  device.setLockStep(true);
+  REQUIRE(device.open());
+  device.setForce(cVector3d(0, 0, 0));
+  cVector3d p;
+  uhaptics::tools::AllocationScope scope;
+  for (int i = 0; i < 500; ++i) {
+    device.getPosition(p);
+    device.setForce(cVector3d(0.1, 0.0, 0.0));
+  }
+  CHECK(scope.count() == 0);
+}
+
+TEST_CASE("real-time mode: servo ticks follow the wall clock, not the call rate", "[chai3d_adapters][device]") {
+  PointMassDevice device(fixtureSelection());
+  REQUIRE(device.open());
+  const auto start = std::chrono::steady_clock::now();
+  std::uint64_t calls = 0;
+  while (std::chrono::steady_clock::now() - start < std::chrono::milliseconds(200)) {
+    device.setForce(cVector3d(0, 0, 0));
+    ++calls;
+  }
+  const double elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  const auto stats = device.getSessionStats();
+  // 1 kHz servo: ticks ~ elapsed / 1 ms. The loop may be descheduled on a loaded 2-core machine, so
+  // allow the catch-up cap to drop time: at least half the ticks, never more than the clock allows.
+  CHECK(static_cast<double>(stats.ticks) <= elapsed / 1e-3 + 1.0);
+  CHECK(static_cast<double>(stats.ticks) >= 0.5 * elapsed / 1e-3);
+  CHECK(calls > stats.ticks);  // the application loop spins faster than the servo: commands held
+}
+
+TEST_CASE("the scripted hand moves the device along its path", "[chai3d_adapters][hand]") {
+  auto selection = fixtureSelection();
+  selection.hand.waypoints = {uhaptics::Vec3(0, 0, 0.5), uhaptics::Vec3(0, 0, -0.5)};
+  selection.hand.lap_time = 2.0;
+  PointMassDevice device(selection);
+  device.setLockStep(true);
+  REQUIRE(device.open());
+  double lowest = 1.0, highest = -1.0;
+  cVector3d p;
+  for (int i = 0; i < 4000; ++i) {
+    device.setForce(cVector3d(0, 0, 0));
+    device.getPosition(p);
+    if (i > 2000) {  // second lap: past the start-up transient
+      lowest = std::min(lowest, p.z());
+      highest = std::max(highest, p.z());
+    }
+  }
+  // Path: z from +0.05 m to -0.05 m (0.5 workspace radius of 0.1 m). A spring-damper behind a
+  // moving anchor lags and undershoots the turns; within 40 % of the span it went where it was led.
+  CHECK(highest > 0.03);
+  CHECK(lowest < -0.03);
+  CHECK(std::abs(p.x()) < 1e-9);  // the path is vertical: nothing pushes sideways
+}
+
+TEST_CASE("stats file written on close", "[chai3d_adapters][stats]") {
+  auto selection = fixtureSelection();
+  selection.stats_path = "uhaptics-fixture-stats.json";
+  std::remove(selection.stats_path.c_str());
+  {
+    PointMassDevice device(selection);
+    device.setLockStep(true);
+    REQUIRE(device.open());
+    for (int i = 0; i < 50; ++i) device.setForce(cVector3d(0, 0, 2.0));
+    REQUIRE(device.close());
+  }
+  std::ifstream file(selection.stats_path);
+  REQUIRE(file.good());
+  std::stringstream text;
+  text << file.rdbuf();
+  CHECK_THAT(text.str(), Catch::Contains("\"ticks\": 50,") && Catch::Contains("\"peak_force_N\": 2,") &&
+                             Catch::Contains("\"renderer\": \"identity\""));
+  std::remove(selection.stats_path.c_str());
+}
+
+TEST_CASE("stock cToolCursor + mesh: the hand pushes into a box, the proxy pushes back", "[chai3d_adapters][pipeline]") {
+  // 0.1 m box centred 0.1 m below the workspace centre: its top face at z = -0.05 m. The hand's
+  // path goes down to -0.06 m (0.6 of the 0.1 m radius), so contact is certain.
+  auto selection = fixtureSelection();
+  selection.hand.waypoints = {uhaptics::Vec3(0, 0, 0.3), uhaptics::Vec3(0, 0, -0.6)};
+  selection.hand.lap_time = 2.0;
+  auto device = std::make_shared<PointMassDevice>(selection);
+  device->setLockStep(true);
+
+  cWorld world;
+  cMesh* box = new cMesh();
+  world.addChild(box);
+  cCreateBox(box, 0.1, 0.1, 0.1);
+  box->setLocalPos(0.0, 0.0, -0.1);
+  box->createAABBCollisionDetector(0.01);  // the tree's margin must cover the tool radius
+  box->m_material->setStiffness(1000.0);
+  cToolCursor* tool = new cToolCursor(&world);
+  world.addChild(tool);
+  tool->setHapticDevice(device);
+  tool->setRadius(0.005);
+  tool->setWorkspaceRadius(0.1);  // world units = device units here
+  REQUIRE(tool->start());
+
+  double deepest = 0.0;
+  double maxForce = 0.0;
+  for (int i = 0; i < 3000; ++i) {
+    world.computeGlobalPositions(true);
+    tool->updateFromDevice();
+    tool->computeInteractionForces();
+    tool->applyToDevice();
+    const double goal = tool->getHapticPoint(0)->getGlobalPosGoal().z();
+    deepest = std::min(deepest, goal - (-0.05 + 0.005));  // penetration of the contact sphere
+    maxForce = std::max(maxForce, tool->getDeviceGlobalForce().z());
+    CHECK(tool->getDeviceGlobalForce().length() < 1e3);
+  }
+  const auto stats = device->getSessionStats();
+  CHECK(stats.ticks == 3000);
+  CHECK(stats.contacts >= 1);
+  // At rest in contact the proxy spring (1000 N/m) balances the hand (at most 8 N): < 8 mm deep,
+  // and the force CHAI3D sent peaked near the hand's force (above 1 N: a real push, not ripple).
+  CHECK(deepest < 0.0);
+  CHECK(deepest > -0.012);
+  CHECK(maxForce > 1.0);
+  CHECK(stats.peak_force == Approx(maxForce).epsilon(1e-9));
+  tool->stop();
+}
