@@ -77,6 +77,9 @@ TEST_CASE("config file selects, the environment overrides", "[chai3d][selection]
   CHECK(s.hand.waypoints[1].y() == 0.2);
   CHECK(s.option("coupling_stiffness", 1.0, 0.0, 1e4) == 250.0);
   CHECK_THROWS_WITH(s.option("coupling_stiffness", 1.0, 0.0, 100.0), Catch::Contains("coupling_stiffness"));
+  s.options["coupling_stiffness"] = 300.0;  // set in code: wins over the file
+  CHECK(s.option("coupling_stiffness", 1.0, 0.0, 1e4) == 300.0);
+  CHECK_THROWS_WITH(s.option("coupling_stiffness", 1.0, 0.0, 100.0), Catch::Contains("outside"));
   env.values["UHAPTICS_DEVICE"] = "tau";
   s = readDeviceSelection(kDevices, kBackends, env.lookup());
   CHECK(s.device == "tau");

@@ -1,3 +1,4 @@
+cmake_minimum_required(VERSION 3.19)  # string(JSON); quoted arguments are never dereferenced
 # Runs one unchanged CHAI3D example headless for a bounded time with a uhaptics device selected, then
 # checks what the device recorded. cmake -P run_example.cmake with
 #   EXE, DEVICE, SECONDS, STATS (stats file path), XVFB_RUN, TIMEOUT, EXPECT:
@@ -43,12 +44,15 @@ string(JSON output GET "${json}" peak_output)
 if(NOT device STREQUAL DEVICE)
   message(FATAL_ERROR "stats are from device '${device}', expected '${DEVICE}'")
 endif()
-# Half the nominal rate at least: the haptic thread shares 2 cores with Xvfb's software GL.
-if(ticks LESS 500 OR rate LESS 250)
+# The device opens after the window and GL context exist (about 1 s under Xvfb): ask for half a
+# second of servo ticks, at no less than half the nominal rate (the haptic thread shares 2 cores with
+# Xvfb's software GL).
+if(ticks LESS 250 OR rate LESS 250)
   message(FATAL_ERROR "only ${ticks} servo ticks (${rate} Hz) in ${seconds} s")
 endif()
-# 0.1 N: well above numerical noise, well below what a spring or a contact produces here.
-if(peak LESS 0.1 OR output EQUAL 0)
+# 0.05 N, the statistics' contact threshold: far above numerical noise (free space gives exactly 0),
+# below the weakest contact these scenes produce (04-shapes' spheres at 0.4 of the stiffness).
+if(peak LESS 0.05 OR output EQUAL 0)
   message(FATAL_ERROR "no force rendered: peak commanded ${peak} N, peak actuator output ${output}")
 endif()
 if(EXPECT STREQUAL "contacts" AND contacts LESS 1)

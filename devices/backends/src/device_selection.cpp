@@ -45,6 +45,13 @@ void readHand(const ParamFile& config, ScriptedHandOptions& hand, bool& enabled)
 }  // namespace
 
 double DeviceSelection::option(const std::string& name, double fallback, double lo, double hi) const {
+  if (const auto it = options.find(name); it != options.end()) {
+    if (!(it->second >= lo && it->second <= hi)) {
+      throw Error("device option " + device + "/" + name + " = " + std::to_string(it->second) + " is outside [" +
+                  std::to_string(lo) + ", " + std::to_string(hi) + "]");
+    }
+    return it->second;
+  }
   if (!config) return fallback;
   return config->numberOr("options/" + device + "/" + name, fallback, lo, hi);
 }

@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 
 namespace chai3d {
 namespace {
@@ -39,6 +40,11 @@ void cUhapticsDevice::setCommonSpecifications(const std::string& a_modelName) {
   m_specifications.m_gripperMaxAngleRad = 0.0;
   m_specifications.m_sensedGripper = false;
   m_specifications.m_actuatedGripper = false;
+}
+
+std::string cUhapticsDevice::paramsDirectory() {
+  const char* dir = std::getenv("UHAPTICS_PARAMS_DIR");
+  return dir != nullptr && *dir != '\0' ? std::string(dir) : std::string(UHAPTICS_PARAMS_DIR);
 }
 
 double cUhapticsDevice::wallTime() const noexcept {

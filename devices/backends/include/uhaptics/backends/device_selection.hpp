@@ -14,6 +14,7 @@
 //             "waypoint_count": 2, "waypoints": [0,0,0.5, 0,0,-0.3]},
 //    "options": {"<device>": {"<option>": value, ...}}}  (device-specific renderer options)
 #include <functional>
+#include <map>
 #include <memory>
 #include <optional>
 #include <string>
@@ -31,8 +32,9 @@ struct DeviceSelection {
   bool hand_enabled = true;      // only meaningful with the sim backend
   ScriptedHandOptions hand;
   std::optional<ParamFile> config;  // for device-specific options ("options/<device>/<name>")
+  std::map<std::string, double> options;  // device options set in code; win over the config file
 
-  /// A device option from the config file, fallback when absent; validated against [lo, hi].
+  /// A device option (options map, else config file, else fallback); validated against [lo, hi].
   double option(const std::string& name, double fallback, double lo, double hi) const;
 };
 

@@ -107,6 +107,10 @@ class cUhapticsDevice : public cGenericHapticDevice {
 
   /// Fills the fields every uhaptics device shares (manufacturer, no gripper, no switches).
   void setCommonSpecifications(const std::string& a_modelName);
+  /// Folder of the device parameter files: $UHAPTICS_PARAMS_DIR, else the one this build ships.
+  static std::string paramsDirectory();
+  /// Held during every hook; subclass accessors that read device state take it too.
+  std::mutex& deviceMutex() { return m_mutex; }
 
   uhaptics::DeviceSelection m_selection;
 
