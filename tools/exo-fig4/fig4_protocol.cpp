@@ -1,0 +1,114 @@
+#include "fig4_protocol.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "uhaptics/renderers/underactuated_renderers.hpp"
+
+namespace uhaptics::exo {
+
+const char* methodName(int m) {
+  static constexpr const char* kNames[] = {"standard", "null-space", "subspace (linearized)", "subspace (nonlinear)"};
+  return m >= 0 && m < kMethodCount ? kNames[m] : "?";
+}
+const char* methodKey(int m) {
+  static constexpr const char* kKeys[] = {"standard", "nullspace", "subspace_lin", "subspace_nl"};
+  return m >= 0 && m < kMethodCount ? kKeys[m] : "?";
+}
+
+Fig4Result runFig4(const ExoFingerModel& model, const Fig4Options& o) {
+  if (!(o.zq > 0.0 && std::isfinite(o.zq))) throw Error("Z_q must be positive");
+  if (!(o.min_actuator_step > 0.0)) throw Error("min_actuator_step must be positive");
+  FingerTrajectory trajectory = o.trajectory_csv.empty()
+                                    ? FingerTrajectory::synthesized(model, o.duration_s, o.period_s, 1000.0)
+                                    : FingerTrajectory::fromCsv(model, o.trajectory_csv);
+  ExoFingerSim sim(model, trajectory, {o.update_rate_hz, true});
+
+  // Pass 1: the device states and avg(|J_a|) over the trajectory (the paper's normalization).
+  std::vector<double> times;
+  std::vector<ExoFingerModel::JointVector> states;
+  double sum_Ja = 0.0;
+  while (true) {
+    const auto& s = sim.state();
+    times.push_back(s.time);
+    states.push_back(s.q);
+    ExoFingerModel::Jacobian J;
+    model.jacobian(s.q, J);
+    sum_Ja += J.col(0).norm();
+    if (sim.finished()) break;
+    sim.step();
+  }
+  Fig4Result r;
+  r.avg_abs_Ja = sum_Ja / static_cast<double>(states.size());
+  r.zx = o.zq / (r.avg_abs_Ja * r.avg_abs_Ja);
+
+  UnderactuatedGains<ExoFingerModel> gains;
+  gains.Zx = r.zx * Mat2::Identity();
+  gains.Zq(0, 0) = o.zq;
+  gains.force_limit = model.forceLimit();
+  StandardRenderer<ExoFingerModel> standard(model, gains);
+  NullSpaceRenderer<ExoFingerModel> nullspace(model, gains);
+  LinearizedSubspaceRenderer<ExoFingerModel> linearized(model, gains);
+  NonlinearSubspaceRenderer<ExoFingerModel> nonlinear(model, gains, o.solver);
+
+  const ExoFingerModel::TaskVector proxy = ExoFingerModel::TaskVector::Zero();
+  r.frames.resize(states.size());
+  long iteration_sum = 0;
+  for (std::size_t k = 0; k < states.size(); ++k) {
+    Fig4Frame& f = r.frames[k];
+    f.t = times[k];
+    f.q = states[k];
+    model.forward(f.q, f.x);
+    const auto tickOne = [&](auto& renderer, int m) {
+      ExoFingerModel::ActuatorVector tau;
+      f.fault[m] = static_cast<int>(renderer.tick(f.q, proxy, tau));
+      f.force[m] = tau(0);
+      f.theory[m] = renderer.displayedImpedance()(0, 0);  // S = (1, 0): the actuated block
+    };
+    tickOne(standard, kStandard);
+    tickOne(nullspace, kNullSpace);
+    tickOne(linearized, kSubspaceLinearized);
+    tickOne(nonlinear, kSubspaceNonlinear);
+    f.nonlinear_iterations = nonlinear.last().nonlinear.iterations;
+    f.nonlinear_residual = nonlinear.last().nonlinear.residual;
+    iteration_sum += f.nonlinear_iterations;
+    r.max_nonlinear_iterations = std::max(r.max_nonlinear_iterations, f.nonlinear_iterations);
+    if (std::isfinite(f.nonlinear_residual)) r.max_nonlinear_residual = std::max(r.max_nonlinear_residual, f.nonlinear_residual);
+    for (int m = 0; m < kMethodCount; ++m) {
+      f.fd[m] = std::numeric_limits<double>::quiet_NaN();
+      if (k > 0) {
+        const Fig4Frame& prev = r.frames[k - 1];
+        f.fd[m] = underactuated::finiteDifferenceStiffness<1>(Vec<1>(f.force[m] - prev.force[m]),
+                                                              Vec<1>(f.q(0) - prev.q(0)), o.min_actuator_step);
+      }
+    }
+  }
+  r.mean_nonlinear_iterations = static_cast<double>(iteration_sum) / static_cast<double>(states.size());
+
+  for (int m = 0; m < kMethodCount; ++m) {
+    Fig4MethodSummary& s = r.summary[m];
+    s.theory_min = std::numeric_limits<double>::infinity();
+    s.theory_max = -std::numeric_limits<double>::infinity();
+    s.fd_max = -std::numeric_limits<double>::infinity();
+    for (const Fig4Frame& f : r.frames) {
+      ++s.frames;
+      if (f.fault[m] != 0) ++s.faults;
+      s.max_abs_force = std::max(s.max_abs_force, std::abs(f.force[m]));
+      s.theory_min = std::min(s.theory_min, f.theory[m]);
+      s.theory_max = std::max(s.theory_max, f.theory[m]);
+      // Passive in theory: d tau_a / d q_a <= 0 (tiny positive round-off counts as passive).
+      if (f.theory[m] <= 1e-12 * o.zq) ++s.theory_passive;
+      if (std::isfinite(f.fd[m])) {
+        ++s.fd_frames;
+        if (f.fd[m] <= 0.0) ++s.fd_passive;
+        s.fd_max = std::max(s.fd_max, f.fd[m]);
+      }
+      if (m == kSubspaceLinearized || m == kSubspaceNonlinear)
+        r.max_subspace_theory_error = std::max(r.max_subspace_theory_error, std::abs(f.theory[m] + o.zq));
+    }
+  }
+  return r;
+}
+
+}  // namespace uhaptics::exo
