@@ -2,10 +2,11 @@
 // The nonlinear subspace proxy (paper 000, eq. 6): q* = argmin_q |x_p - f(q)|^2, solved at servo
 // rate by an iterative least-squares method warm-started from the previous tick's q*.
 //
-// Stopping rule, in task units so that joints of mixed units (m, rad) need no scaling: stop when
-// the last Gauss-Newton correction moves the probe by less than `tolerance`, |J dq| < tolerance.
-// Near the optimum GN converges quadratically, so the remaining distance to the optimum is then far
-// below the tolerance. Every linear solve uses the core's damped least squares (finite and bounded
+// Stopping rule, in task units so that joints of mixed units (m, rad) need no scaling: Gauss-Newton
+// stops when an undamped correction moves the probe by less than `tolerance`, |J dq| < tolerance
+// (|J dq| is the part of the residual the joints can still remove); Levenberg-Marquardt, whose
+// damped steps are short anywhere, stops on |J^T r| / |J|_F < tolerance. Near a zero-residual
+// optimum GN converges quadratically, so the remaining error is then far below the tolerance. Every linear solve uses the core's damped least squares (finite and bounded
 // at singular configurations).
 //
 // Gauss-Newton is the default: on the exoskeleton it needs fewer model evaluations than
@@ -30,7 +31,7 @@ struct SubspaceSolveOptions {
   int max_iterations = 20;   // hard cap per tick (servo budget)
   LeastSquaresMethod method = LeastSquaresMethod::kGaussNewton;
   RegularizationOptions regularization{};
-  double lm_initial_damping = 1e-3;  // LM: mu relative to max diag(J^T J)
+  double lm_initial_damping = 1e-3;  // LM: mu, relative to diag(J^T J) (Marquardt scaling)
 };
 
 struct SubspaceSolveReport {
@@ -67,15 +68,19 @@ SubspaceSolveReport solveSubspaceProxy(const Model& model, const Vec<Model::kTas
   if (opt.method == LeastSquaresMethod::kGaussNewton) {
     while (rep.iterations < opt.max_iterations) {
       model.jacobian(q, J);
-      const Vec<N> dq = regularizedSolve(J, r, opt.regularization);
+      RegularizedSolveInfo info;
+      const Vec<N> dq = regularizedSolve(J, r, opt.regularization, &info);
       ++rep.iterations;
       rep.last_step = (J * dq).norm();
+      // A damped step (ill-conditioned J) can be short without the point being optimal: only an
+      // undamped short step proves stationarity (|J dq| = |projection of r on range J|).
+      const bool exact_step = !info.damped();
       q += dq;
       model.forward(q, x);
       ++rep.evaluations;
       r = x_p - x;
       if (!q.allFinite() || !r.allFinite()) break;
-      if (rep.last_step < opt.tolerance) {
+      if (exact_step && rep.last_step < opt.tolerance) {
         rep.converged = true;
         break;
       }
@@ -117,19 +122,19 @@ SubspaceSolveReport solveSubspaceProxy(const Model& model, const Vec<Model::kTas
         const double t = 2.0 * rho - 1.0;
         mu *= std::max(1.0 / 3.0, 1.0 - t * t * t);
         nu = 2.0;
-        if (rep.last_step < opt.tolerance) {
-          rep.converged = true;
-          break;
-        }
         model.jacobian(q, J);
       } else {
-        if (rep.last_step < opt.tolerance) {  // nothing left to gain at this accuracy
-          rep.converged = true;
-          break;
-        }
         mu *= nu;
         nu *= 2.0;
       }
+      // Stationarity in task units: |J^T r| / |J|_F (the part of r the joints can still reduce).
+      // The damped step length is no test here: heavy damping makes it short anywhere.
+      const double jnorm = J.norm();
+      if (jnorm > 0.0 && (J.transpose() * r).norm() < opt.tolerance * jnorm) {
+        rep.converged = true;
+        break;
+      }
+      if (mu > 1e12) break;  // no descent at any damping: give up (reported as not converged)
     }
   }
 

@@ -1,0 +1,92 @@
+// The simulated exoskeleton backend: trajectories, rates, force limit and force transmission.
+#include "uhaptics/backends/exo_finger_sim.hpp"
+
+#include <Eigen/LU>
+#include <catch2/catch.hpp>
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <limits>
+
+using namespace uhaptics;
+using Model = ExoFingerModel;
+
+namespace {
+const Model& model() {
+  static const Model m = Model::load(Model::defaultParamsPath(UHAPTICS_PARAMS_DIR));
+  return m;
+}
+std::string writeTemp(const std::string& name, const std::string& text) {
+  const std::string path = std::string("/tmp/uhaptics_exo_test_") + name;
+  std::ofstream(path) << text;
+  return path;
+}
+}  // namespace
+
+TEST_CASE("exo sim: runs a synthesized trajectory at the configured rate, inside the working range") {
+  for (double rate : {500.0, 2000.0}) {
+    ExoFingerSim sim(model(), FingerTrajectory::synthesized(model(), 2.0, 2.0, 1000.0), {rate, true});
+    int steps = 0;
+    while (!sim.finished()) {
+      CHECK(sim.state().fault == Fault::kNone);
+      CHECK(model().inWorkingRange(sim.state().q, 1e-9));
+      sim.command(Model::ActuatorVector(1.0));
+      sim.step();
+      ++steps;
+    }
+    CHECK(steps == static_cast<int>(std::lround(2.0 * rate)));
+  }
+}
+
+TEST_CASE("exo sim: the force loop saturates at the actuator limit and rejects non-finite commands") {
+  ExoFingerSim sim(model(), FingerTrajectory::synthesized(model(), 1.0, 1.0, 1000.0), {500.0, false});
+  sim.command(Model::ActuatorVector(500.0));
+  sim.step();
+  CHECK(sim.state().force(0) == 50.0);
+  sim.command(Model::ActuatorVector(-1e9));
+  sim.step();
+  CHECK(sim.state().force(0) == -50.0);
+  sim.command(Model::ActuatorVector(std::numeric_limits<double>::quiet_NaN()));
+  CHECK(sim.state().fault == Fault::kNonFiniteInput);
+  sim.step();
+  CHECK(sim.state().force(0) == 0.0);
+  // With the lag on, a step command reaches 1 - exp(-T / tau) of its value after one period.
+  ExoFingerSim lagged(model(), FingerTrajectory::synthesized(model(), 1.0, 1.0, 1000.0), {500.0, true});
+  lagged.command(Model::ActuatorVector(10.0));
+  lagged.step();
+  CHECK(lagged.state().force(0) == Approx(10.0 * (1.0 - std::exp(-0.002 / model().forceLoopTimeConstant()))));
+}
+
+TEST_CASE("exo sim: the actuator force reaches the finger through the linkage (virtual work)") {
+  ExoFingerSim sim(model(), FingerTrajectory::synthesized(model(), 1.0, 1.0, 1000.0), {500.0, false});
+  sim.command(Model::ActuatorVector(20.0));
+  sim.step();
+  const auto& s = sim.state();
+  // tau_finger . dx = F dl_x for any small finger motion dx (q_B carries no torque).
+  Model::Jacobian J;
+  model().jacobian(s.q, J);
+  for (const Model::TaskVector& dx : {Model::TaskVector(1e-4, 0.0), Model::TaskVector(0.0, 1e-4), Model::TaskVector(-3e-5, 7e-5)}) {
+    const Model::JointVector dq = J.inverse() * dx;
+    CHECK(s.finger_torque.dot(dx) == Approx(20.0 * dq(0)).epsilon(1e-9));
+  }
+}
+
+TEST_CASE("exo sim: recorded trajectories are read from CSV and bad files are refused clearly") {
+  const std::string good = writeTemp("good.csv", "time_s,mcp_rad,pip_rad\n0,0.1,0.2\n0.5,0.5,0.6\n1.0,0.2,0.3\n");
+  const FingerTrajectory t = FingerTrajectory::fromCsv(model(), good);
+  CHECK(t.duration() == 1.0);
+  CHECK(t.at(0.25).isApprox(Model::TaskVector(0.3, 0.4)));
+  CHECK(t.at(5.0).isApprox(Model::TaskVector(0.2, 0.3)));
+  CHECK_THROWS_WITH(FingerTrajectory::fromCsv(model(), writeTemp("hdr.csv", "t,a,b\n0,0,0\n")),
+                    Catch::Contains("header"));
+  CHECK_THROWS_WITH(FingerTrajectory::fromCsv(model(), writeTemp("num.csv", "time_s,mcp_rad,pip_rad\n0,0.1,x\n1,0,0\n")),
+                    Catch::Contains(":2:") && Catch::Contains("not a number"));
+  CHECK_THROWS_WITH(FingerTrajectory::fromCsv(model(), writeTemp("rng.csv", "time_s,mcp_rad,pip_rad\n0,0.1,0.1\n1,3.0,0.1\n")),
+                    Catch::Contains("outside the working range"));
+  CHECK_THROWS_WITH(FingerTrajectory::fromCsv(model(), writeTemp("time.csv", "time_s,mcp_rad,pip_rad\n0,0.1,0.1\n0,0.2,0.1\n")),
+                    Catch::Contains("increase"));
+  CHECK_THROWS_WITH(FingerTrajectory::fromCsv(model(), writeTemp("nan.csv", "time_s,mcp_rad,pip_rad\n0,nan,0.1\n1,0.2,0.1\n")),
+                    Catch::Contains("not finite"));
+  CHECK_THROWS_WITH(FingerTrajectory::fromCsv(model(), "/nonexistent.csv"), Catch::Contains("cannot open"));
+  CHECK_THROWS_WITH(ExoFingerSim(model(), t, {1.0, true}), Catch::Contains("update_rate_hz"));
+}
