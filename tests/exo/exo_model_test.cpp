@@ -36,7 +36,7 @@ ExoFingerModel::TaskVector gridPoint(const ExoFingerModel& m, int i, int j, int 
 }
 }  // namespace
 
-TEST_CASE("exo: shipped parameters load and describe an L16-class finger module") {
+TEST_CASE("shipped parameters load and describe an L16-class finger module") {
   const auto& m = model();
   CHECK(m.forceLimit()(0) == 50.0);
   CHECK(m.jointUpper()(0) - m.jointLower()(0) == Approx(0.050));
@@ -45,7 +45,7 @@ TEST_CASE("exo: shipped parameters load and describe an L16-class finger module"
   CHECK(m.taskUpper()(1) == Approx(100.0 * M_PI / 180.0));
 }
 
-TEST_CASE("exo: analytic Jacobian matches central differences over the whole working range") {
+TEST_CASE("analytic Jacobian matches central differences over the whole working range") {
   const auto& m = model();
   constexpr int n = 61;
   double worst = 0.0;
@@ -71,7 +71,7 @@ TEST_CASE("exo: analytic Jacobian matches central differences over the whole wor
   CHECK(worst < 1e-6);
 }
 
-TEST_CASE("exo: the map is one-to-one with a nonsingular Jacobian on a dense grid") {
+TEST_CASE("the map is one-to-one with a nonsingular Jacobian on a dense grid") {
   const auto& m = model();
   constexpr int n = 201;  // 0.45 deg x 0.5 deg steps
   double min_abs_det = 1e300, max_abs_det = 0.0, worst_roundtrip = 0.0;
@@ -125,7 +125,7 @@ TEST_CASE("exo: the map is one-to-one with a nonsingular Jacobian on a dense gri
   CHECK(max_abs_det / min_abs_det > 2.0);
 }
 
-TEST_CASE("exo: phalanx points follow the joint angles") {
+TEST_CASE("phalanx points follow the joint angles") {
   const auto& m = model();
   ExoFingerPoints p;
   m.points(ExoFingerModel::TaskVector(0.0, 0.0), p);
@@ -136,7 +136,7 @@ TEST_CASE("exo: phalanx points follow the joint angles") {
   CHECK((p.middle_contact - Vec2(-0.014, 0.045)).norm() < 1e-12);
 }
 
-TEST_CASE("exo: malformed or out-of-range parameter files are refused with a clear message") {
+TEST_CASE("malformed or out-of-range parameter files are refused with a clear message") {
   const auto loadText = [](const std::string& text) { return ExoFingerModel::fromParams(ParamFile::parse(text, "exo.json")); };
   CHECK_NOTHROW(loadText(shippedText()));
   CHECK_THROWS_WITH(loadText("{ not json"), Catch::Contains("not valid JSON"));

@@ -34,7 +34,7 @@ const exo::Fig4Result& fig4() {
 }
 }  // namespace
 
-TEST_CASE("exo: Fig. 4 protocol, the subspace methods display exactly -Z_q (eq. 9) in every frame") {
+TEST_CASE("Fig. 4 protocol, the subspace methods display exactly -Z_q (eq. 9) in every frame") {
   const auto& r = fig4();
   REQUIRE(r.frames.size() > 2000);
   INFO("avg |J_a| = " << r.avg_abs_Ja << " rad/m, Z_x = " << r.zx);
@@ -49,7 +49,7 @@ TEST_CASE("exo: Fig. 4 protocol, the subspace methods display exactly -Z_q (eq. 
   }
 }
 
-TEST_CASE("exo: Fig. 4 protocol, the nonlinear subspace proxy is passive in every frame in practice") {
+TEST_CASE("Fig. 4 protocol, the nonlinear subspace proxy is passive in every frame in practice") {
   const auto& r = fig4();
   const auto& nl = r.summary[exo::kSubspaceNonlinear];
   REQUIRE(static_cast<std::size_t>(nl.fd_frames) > r.frames.size() * 9 / 10);  // the trajectory keeps the actuator moving
@@ -59,7 +59,7 @@ TEST_CASE("exo: Fig. 4 protocol, the nonlinear subspace proxy is passive in ever
   CHECK(nl.fd_max == Approx(-1.0).margin(1e-3));
 }
 
-TEST_CASE("exo: Fig. 4 protocol, what the other methods do in practice (reported)") {
+TEST_CASE("Fig. 4 protocol, what the other methods do in practice (reported)") {
   const auto& r = fig4();
   for (int m = 0; m < exo::kMethodCount; ++m) {
     const auto& s = r.summary[m];
@@ -73,7 +73,7 @@ TEST_CASE("exo: Fig. 4 protocol, what the other methods do in practice (reported
   CHECK(r.summary[exo::kNullSpace].fd_passive < r.summary[exo::kNullSpace].fd_frames);
 }
 
-TEST_CASE("exo: nonlinear and linearized subspace proxies agree for small deviations, not for large ones") {
+TEST_CASE("nonlinear and linearized subspace proxies agree for small deviations, not for large ones") {
   const Model& m = model();
   const auto g = gains();
   LinearizedSubspaceRenderer<Model> lin(m, g);
@@ -111,7 +111,7 @@ TEST_CASE("exo: nonlinear and linearized subspace proxies agree for small deviat
   CHECK(miss_lin > 1.0 * M_PI / 180.0);  // more than a degree off: measurably worse
 }
 
-TEST_CASE("exo: the nonlinear solve converges in a few warm-started iterations along the trajectory") {
+TEST_CASE("the nonlinear solve converges in a few warm-started iterations along the trajectory") {
   const auto& r = fig4();
   WARN("nonlinear subspace proxy over " << r.frames.size() << " frames: mean " << r.mean_nonlinear_iterations
                                        << " iterations, max " << r.max_nonlinear_iterations << ", max residual "
@@ -123,7 +123,7 @@ TEST_CASE("exo: the nonlinear solve converges in a few warm-started iterations a
   CHECK(r.max_nonlinear_residual < 1e-10);
 }
 
-TEST_CASE("exo: bad input gives a fault and a zero command, never a non-finite one") {
+TEST_CASE("bad input gives a fault and a zero command, never a non-finite one") {
   const Model& m = model();
   const auto g = gains(1.0, 1.0);
   StandardRenderer<Model> st(m, g);
@@ -155,7 +155,7 @@ TEST_CASE("exo: bad input gives a fault and a zero command, never a non-finite o
   CHECK(tau(0) != 0.0);
 }
 
-TEST_CASE("exo: commands are clamped to the actuator's force limit") {
+TEST_CASE("commands are clamped to the actuator's force limit") {
   const Model& m = model();
   // Z_q = 1e4 N/m over tens of mm of subspace deviation asks for hundreds of newtons.
   const auto g = gains(1e4 / (60.0 * 60.0), 1e4);
@@ -174,7 +174,7 @@ TEST_CASE("exo: commands are clamped to the actuator's force limit") {
   CHECK(std::abs(tau(0)) <= 50.0);
 }
 
-TEST_CASE("exo: invalid gains are refused at set-up with a clear message") {
+TEST_CASE("invalid gains are refused at set-up with a clear message") {
   const Model& m = model();
   auto g = gains();
   g.Zx(0, 1) = 1.0;
@@ -190,7 +190,7 @@ TEST_CASE("exo: invalid gains are refused at set-up with a clear message") {
   CHECK_THROWS_WITH(NonlinearSubspaceRenderer<Model>(m, gains(), bad), Catch::Contains("tolerance"));
 }
 
-TEST_CASE("exo: a servo tick allocates nothing, for every renderer") {
+TEST_CASE("a servo tick allocates nothing, for every renderer") {
   const Model& m = model();
   const auto g = gains();
   StandardRenderer<Model> st(m, g);
@@ -215,4 +215,56 @@ TEST_CASE("exo: a servo tick allocates nothing, for every renderer") {
   }
   CHECK(scope.count() == 0);
   CHECK(std::isfinite(sink));
+}
+
+TEST_CASE("near a contact (finger within 5 deg of the proxy) the linearized subspace proxy is passive too") {
+  exo::Fig4Options o;
+  o.contact = true;
+  o.proxy = Model::TaskVector(45.0, 50.0) * (M_PI / 180.0);
+  o.contact_amplitude = 5.0 * M_PI / 180.0;
+  const exo::Fig4Result r = exo::runFig4(model(), o);
+  const auto& lin = r.summary[exo::kSubspaceLinearized];
+  const auto& nl = r.summary[exo::kSubspaceNonlinear];
+  REQUIRE(lin.fd_frames > 2500);
+  CHECK(lin.fd_passive == lin.fd_frames);
+  CHECK(nl.fd_passive == nl.fd_frames);
+  CHECK(r.max_subspace_theory_error < 1e-12);
+  WARN("contact variant, +-5 deg: passive by finite differences: standard "
+       << 100.0 * r.summary[exo::kStandard].fdShare() << " %, null-space " << 100.0 * r.summary[exo::kNullSpace].fdShare()
+       << " %, linearized subspace " << 100.0 * lin.fdShare() << " %, nonlinear subspace " << 100.0 * nl.fdShare() << " %");
+}
+
+namespace {
+// A model whose Jacobian loses rank: f(q) = (q0 + q1, q0 + q1). Every subspace step is ambiguous.
+struct DegenerateModel {
+  static constexpr int kJoints = 2, kActuated = 1, kTask = 2;
+  Mat<1, 2> S = (Mat<1, 2>() << 1.0, 0.0).finished();
+  void forward(const Vec2& q, Vec2& x) const noexcept { x = Vec2::Constant(q(0) + q(1)); }
+  void jacobian(const Vec2&, Mat2& J) const noexcept { J = Mat2::Ones(); }
+  const Mat<1, 2>& selection() const noexcept { return S; }
+};
+}  // namespace
+
+TEST_CASE("a singular Jacobian gives Fault::kSingular and a zero command where J is inverted") {
+  const DegenerateModel m;
+  UnderactuatedGains<DegenerateModel> g;
+  g.force_limit(0) = 10.0;
+  LinearizedSubspaceRenderer<DegenerateModel> lin(m, g);
+  NonlinearSubspaceRenderer<DegenerateModel> nl(m, g);
+  StandardRenderer<DegenerateModel> st(m, g);
+  NullSpaceRenderer<DegenerateModel> ns(m, g);
+  const Vec2 q(0.1, 0.2), xp(1.0, 0.5);
+  Vec<1> tau = Vec<1>::Constant(7.0);
+  CHECK(lin.tick(q, xp, tau) == Fault::kSingular);
+  CHECK(tau.isZero(0.0));
+  // The nonlinear solve never sees an undamped step on a rank-deficient J: it reports
+  // non-convergence and the command is zero.
+  tau.setConstant(7.0);
+  CHECK(nl.tick(q, xp, tau) == Fault::kNotConverged);
+  CHECK(tau.isZero(0.0));
+  // Transpose-based methods need no inverse of J: finite, bounded commands.
+  CHECK(st.tick(q, xp, tau) == Fault::kNone);
+  CHECK(std::abs(tau(0)) <= 10.0);
+  CHECK(ns.tick(q, xp, tau) == Fault::kNone);
+  CHECK(tau.allFinite());
 }

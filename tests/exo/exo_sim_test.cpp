@@ -23,7 +23,7 @@ std::string writeTemp(const std::string& name, const std::string& text) {
 }
 }  // namespace
 
-TEST_CASE("exo sim: runs a synthesized trajectory at the configured rate, inside the working range") {
+TEST_CASE("sim: runs a synthesized trajectory at the configured rate, inside the working range") {
   for (double rate : {500.0, 2000.0}) {
     ExoFingerSim sim(model(), FingerTrajectory::synthesized(model(), 2.0, 2.0, 1000.0), {rate, true});
     int steps = 0;
@@ -38,7 +38,7 @@ TEST_CASE("exo sim: runs a synthesized trajectory at the configured rate, inside
   }
 }
 
-TEST_CASE("exo sim: the force loop saturates at the actuator limit and rejects non-finite commands") {
+TEST_CASE("sim: the force loop saturates at the actuator limit and rejects non-finite commands") {
   ExoFingerSim sim(model(), FingerTrajectory::synthesized(model(), 1.0, 1.0, 1000.0), {500.0, false});
   sim.command(Model::ActuatorVector(500.0));
   sim.step();
@@ -57,7 +57,7 @@ TEST_CASE("exo sim: the force loop saturates at the actuator limit and rejects n
   CHECK(lagged.state().force(0) == Approx(10.0 * (1.0 - std::exp(-0.002 / model().forceLoopTimeConstant()))));
 }
 
-TEST_CASE("exo sim: the actuator force reaches the finger through the linkage (virtual work)") {
+TEST_CASE("sim: the actuator force reaches the finger through the linkage (virtual work)") {
   ExoFingerSim sim(model(), FingerTrajectory::synthesized(model(), 1.0, 1.0, 1000.0), {500.0, false});
   sim.command(Model::ActuatorVector(20.0));
   sim.step();
@@ -71,7 +71,7 @@ TEST_CASE("exo sim: the actuator force reaches the finger through the linkage (v
   }
 }
 
-TEST_CASE("exo sim: recorded trajectories are read from CSV and bad files are refused clearly") {
+TEST_CASE("sim: recorded trajectories are read from CSV and bad files are refused clearly") {
   const std::string good = writeTemp("good.csv", "time_s,mcp_rad,pip_rad\n0,0.1,0.2\n0.5,0.5,0.6\n1.0,0.2,0.3\n");
   const FingerTrajectory t = FingerTrajectory::fromCsv(model(), good);
   CHECK(t.duration() == 1.0);

@@ -20,9 +20,12 @@ const char* methodKey(int m) {
 Fig4Result runFig4(const ExoFingerModel& model, const Fig4Options& o) {
   if (!(o.zq > 0.0 && std::isfinite(o.zq))) throw Error("Z_q must be positive");
   if (!(o.min_actuator_step > 0.0)) throw Error("min_actuator_step must be positive");
-  FingerTrajectory trajectory = o.trajectory_csv.empty()
-                                    ? FingerTrajectory::synthesized(model, o.duration_s, o.period_s, 1000.0)
-                                    : FingerTrajectory::fromCsv(model, o.trajectory_csv);
+  FingerTrajectory trajectory =
+      !o.trajectory_csv.empty()
+          ? FingerTrajectory::fromCsv(model, o.trajectory_csv)
+          : o.contact ? FingerTrajectory::synthesizedAround(model, o.proxy, o.contact_amplitude, o.duration_s,
+                                                            o.period_s, 1000.0)
+                      : FingerTrajectory::synthesized(model, o.duration_s, o.period_s, 1000.0);
   ExoFingerSim sim(model, trajectory, {o.update_rate_hz, true});
 
   // Pass 1: the device states and avg(|J_a|) over the trajectory (the paper's normalization).
@@ -52,7 +55,7 @@ Fig4Result runFig4(const ExoFingerModel& model, const Fig4Options& o) {
   LinearizedSubspaceRenderer<ExoFingerModel> linearized(model, gains);
   NonlinearSubspaceRenderer<ExoFingerModel> nonlinear(model, gains, o.solver);
 
-  const ExoFingerModel::TaskVector proxy = ExoFingerModel::TaskVector::Zero();
+  const ExoFingerModel::TaskVector proxy = o.contact ? o.proxy : ExoFingerModel::TaskVector::Zero();
   r.frames.resize(states.size());
   long iteration_sum = 0;
   for (std::size_t k = 0; k < states.size(); ++k) {

@@ -28,6 +28,11 @@ struct Fig4Options {
   double min_actuator_step = 1e-6;
   SubspaceSolveOptions solver{};
   std::string trajectory_csv;     // empty: synthesized flexion-extension
+  // Contact variant: proxy held at `proxy` and the finger oscillating within +-contact_amplitude of
+  // it (instead of the paper's proxy at 0 and full-range flexion). Ignored when trajectory_csv is set.
+  bool contact = false;
+  ExoFingerModel::TaskVector proxy = ExoFingerModel::TaskVector::Zero();
+  double contact_amplitude = 0.17;  // rad (~10 deg)
 };
 
 struct Fig4Frame {

@@ -34,6 +34,25 @@ FingerTrajectory FingerTrajectory::synthesized(const ExoFingerModel& model, doub
   return fromSamples(model, std::move(t), std::move(x), "synthesized trajectory");
 }
 
+FingerTrajectory FingerTrajectory::synthesizedAround(const ExoFingerModel& model,
+                                                    const ExoFingerModel::TaskVector& centre, double amplitude,
+                                                    double duration_s, double period_s, double sample_rate_hz) {
+  if (!(duration_s > 0.0 && duration_s < 3600.0)) throw Error("trajectory duration must lie in (0, 3600) s");
+  if (!(period_s > 0.05 && period_s < 600.0)) throw Error("trajectory period must lie in (0.05, 600) s");
+  if (!(sample_rate_hz >= 10.0 && sample_rate_hz <= 1e5)) throw Error("trajectory rate must lie in [10, 1e5] Hz");
+  if (!(amplitude >= 0.0 && amplitude < 1.0)) throw Error("trajectory amplitude must lie in [0, 1) rad");
+  const auto n = static_cast<std::size_t>(std::ceil(duration_s * sample_rate_hz)) + 1;
+  std::vector<double> t(n);
+  std::vector<ExoFingerModel::TaskVector> x(n);
+  const double w = 2.0 * kPi / period_s;
+  for (std::size_t i = 0; i < n; ++i) {
+    t[i] = static_cast<double>(i) / sample_rate_hz;
+    x[i] = centre + amplitude * ExoFingerModel::TaskVector(std::sin(w * t[i]), std::sin(1.5 * w * t[i] + 1.0));
+  }
+  // fromSamples names the first pose outside the working range if centre +- amplitude leaves it.
+  return fromSamples(model, std::move(t), std::move(x), "synthesized trajectory around a pose");
+}
+
 FingerTrajectory FingerTrajectory::fromCsv(const ExoFingerModel& model, const std::string& path) {
   std::ifstream in(path);
   if (!in) throw Error(path + ": cannot open trajectory file");

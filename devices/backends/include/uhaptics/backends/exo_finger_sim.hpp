@@ -29,6 +29,11 @@ class FingerTrajectory {
   /// situation where the baselines lose passivity). margin keeps the angles off the range limits.
   static FingerTrajectory synthesized(const ExoFingerModel& model, double duration_s, double period_s,
                                       double sample_rate_hz, double margin = 0.05);
+  /// Small oscillations around a pose (a finger pressing into and moving along a contact):
+  /// MCP = centre_0 + amplitude sin(w t), PIP = centre_1 + amplitude sin(1.5 w t + 1), w = 2 pi / period.
+  static FingerTrajectory synthesizedAround(const ExoFingerModel& model, const ExoFingerModel::TaskVector& centre,
+                                            double amplitude, double duration_s, double period_s,
+                                            double sample_rate_hz);
   /// A recorded trajectory: CSV with header "time_s,mcp_rad,pip_rad" (extra columns ignored),
   /// strictly increasing times, every pose inside the model's working range. Throws Error naming
   /// the file and line otherwise.
