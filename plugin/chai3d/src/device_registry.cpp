@@ -1,5 +1,7 @@
 #include "uhaptics/chai3d/device_registry.hpp"
 
+#include "uhaptics/chai3d/CExoFingerDevice.hpp"
+
 #include <algorithm>
 #include <cstdlib>
 #include <functional>
@@ -17,6 +19,8 @@ struct Entry {
 // One line per device class built into the plugin.
 const std::vector<Entry>& entries() {
   static const std::vector<Entry> table = {
+      {"exo", "finger exoskeleton module, subspace proxy (paper 000)", {"sim"},
+       [](const DeviceSelection& s, unsigned int n) -> chai3d::cUhapticsDevicePtr { return chai3d::cExoFingerDevice::create(s, n); }},
   };
   return table;
 }

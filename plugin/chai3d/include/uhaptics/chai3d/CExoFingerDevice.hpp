@@ -1,0 +1,79 @@
+#pragma once
+// chai3d::cExoFingerDevice: one finger module of the underactuated hand exoskeleton (paper 000) as
+// a CHAI3D device. One actuated joint (actuator length l_x), one sensed-only joint (rocker q_B); the
+// virtual finger has two joints (MCP, PIP).
+//
+// CHAI3D view: the fingertip, in the finger's flexion plane mapped onto the device frame's y-z plane
+// (finger pointing along +y, palm facing -z; x is never sensed nor actuated), origin at the centre
+// of the fingertip's reachable region.
+//
+// Rendering (paper 000's subspace proxy): the Cartesian force F a stock CHAI3D tool sends is the
+// proxy spring's pull, so it is read back as a proxy displacement through the coupling stiffness:
+// finger-joint torque J_tip^T F, task proxy x_p = f(q) + Z_x^-1 J_tip^T F; the nonlinear subspace
+// proxy q* = argmin |x_p - f(q*)| then gives the actuator force Z_q S (q* - q). Only what the
+// actuated subspace can display is displayed, so the device stays passive (eq. 9) where projecting
+// F directly (the standard method) is not.
+//
+// Simulated backend: the finger is position-driven (paper 000's setting), following flexion-
+// extension cycles whose period is the scripted hand's lap time; the device's force loads the
+// finger, it does not deflect it.
+#include <memory>
+
+#include "uhaptics/backends/exo_finger_sim.hpp"
+#include "uhaptics/chai3d/CUhapticsDevice.hpp"
+#include "uhaptics/models/exo_finger_model.hpp"
+#include "uhaptics/renderers/underactuated_renderers.hpp"
+
+namespace chai3d {
+
+class cExoFingerDevice;
+typedef std::shared_ptr<cExoFingerDevice> cExoFingerDevicePtr;
+
+class cExoFingerDevice : public cUhapticsDevice {
+ public:
+  /// Options ("options/exo/..."): coupling_stiffness Z_x [N m/rad], default 1.0; force_loop_lag
+  /// 1 (default) / 0: the board's force loop as a first-order lag, or ideal.
+  cExoFingerDevice(unsigned int a_deviceNumber, const uhaptics::DeviceSelection& a_selection);
+  virtual ~cExoFingerDevice();
+  static cExoFingerDevicePtr create(const uhaptics::DeviceSelection& a_selection, unsigned int a_deviceNumber = 0) {
+    return std::make_shared<cExoFingerDevice>(a_deviceNumber, a_selection);
+  }
+
+  virtual std::string getRendererName() const { return uhaptics::NonlinearSubspaceRenderer<uhaptics::ExoFingerModel>::kName; }
+
+  /// Finger joint angles (q_MCP, q_PIP) [rad] of the latest state.
+  uhaptics::Vec2 getFingerAngles();
+  /// The finger's phalanx points (hand frame) of the latest state, for multi-point tools.
+  uhaptics::ExoFingerPoints getFingerPoints();
+  const uhaptics::ExoFingerModel& getModel() const { return *m_model; }
+  /// The actuator force of the latest tick [N] and the finger-joint torques the user felt [N m].
+  double getActuatorForce();
+  uhaptics::Vec2 getFingerTorque();
+
+ protected:
+  virtual void startBackend();
+  virtual void stopBackend() noexcept;
+  virtual uhaptics::Fault servoTick(const uhaptics::Vec3& a_force, const uhaptics::Vec3& a_torque,
+                                    const uhaptics::Vec3& a_handForce, double a_dt, double& a_outputMagnitude) noexcept;
+  virtual void readState(uhaptics::Vec3& a_position, uhaptics::Mat3& a_rotation, uhaptics::Vec3& a_linearVelocity,
+                         uhaptics::Vec3& a_angularVelocity) noexcept;
+  virtual int readJointAngles(double a_q[C_MAX_DOF]) noexcept;
+
+ private:
+  using Model = uhaptics::ExoFingerModel;
+  using Renderer = uhaptics::NonlinearSubspaceRenderer<Model>;
+  uhaptics::Vec2 fingertip(const Model::TaskVector& a_x) const noexcept;
+  uhaptics::Vec3 toDevice(const uhaptics::Vec2& a_handPoint) const noexcept;
+
+  std::unique_ptr<const Model> m_model;  // the sim and the renderer keep references to it
+  std::unique_ptr<uhaptics::ExoFingerSim> m_sim;
+  std::unique_ptr<Renderer> m_renderer;
+  uhaptics::ExoFingerData m_data;
+  double m_couplingStiffness;                       // Z_x (scalar), N m/rad
+  uhaptics::Vec2 m_centre = uhaptics::Vec2::Zero();  // fingertip workspace centre, hand frame
+  uhaptics::Vec3 m_position = uhaptics::Vec3::Zero();
+  uhaptics::Vec3 m_velocity = uhaptics::Vec3::Zero();
+  Model::ActuatorVector m_actuator = Model::ActuatorVector::Zero();
+};
+
+}  // namespace chai3d

@@ -1,0 +1,174 @@
+#include "uhaptics/chai3d/CExoFingerDevice.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+#include "uhaptics/core/finite_difference.hpp"
+#include "uhaptics/core/regularized_solve.hpp"
+
+namespace chai3d {
+namespace {
+
+constexpr int kGrid = 21;  // samples per finger joint when surveying the working range
+
+}  // namespace
+
+cExoFingerDevice::cExoFingerDevice(unsigned int a_deviceNumber, const uhaptics::DeviceSelection& a_selection)
+    : cUhapticsDevice(a_deviceNumber, a_selection, 1.0 / 500.0),
+      m_model(std::make_unique<Model>(Model::load(Model::defaultParamsPath(paramsDirectory())))),
+      m_couplingStiffness(a_selection.option("coupling_stiffness", 1.0, 1e-3, 100.0)) {
+  const Model& model = *m_model;
+  // Survey the working range: fingertip extent (workspace), actuator lever |d x / d l_x| (for Z_q)
+  // and fingertip displacement per actuator length (for the force the device can show).
+  uhaptics::Vec2 lo = uhaptics::Vec2::Constant(1e9), hi = uhaptics::Vec2::Constant(-1e9);
+  double lever_sq = 0.0, tip_per_length = 0.0, tip_lever_sq = 0.0;
+  int samples = 0;
+  for (int i = 0; i < kGrid; ++i) {
+    for (int j = 0; j < kGrid; ++j) {
+      const Model::TaskVector x = model.taskLower() + (model.taskUpper() - model.taskLower()).cwiseProduct(
+                                                          uhaptics::Vec2(i / (kGrid - 1.0), j / (kGrid - 1.0)));
+      Model::JointVector q;
+      if (!model.inverse(x, q)) continue;
+      const uhaptics::Vec2 tip = fingertip(x);
+      lo = lo.cwiseMin(tip);
+      hi = hi.cwiseMax(tip);
+      Model::Jacobian J;
+      model.jacobian(q, J);
+      const uhaptics::Mat2 Jtip = uhaptics::centralDifferenceJacobian([&](const uhaptics::Vec2& y) { return fingertip(y); }, x);
+      lever_sq += J.col(0).squaredNorm();
+      tip_per_length += (Jtip * J.col(0)).norm();
+      tip_lever_sq += 0.5 * Jtip.squaredNorm();
+      ++samples;
+    }
+  }
+  if (samples == 0) throw uhaptics::Error("exo finger: no configuration of the working range assembles");
+  lever_sq /= samples;
+  tip_per_length /= samples;
+  tip_lever_sq /= samples;
+  m_centre = 0.5 * (lo + hi);
+  const double radius = 0.5 * (hi - lo).minCoeff();
+
+  setCommonSpecifications("finger exoskeleton module");
+  const double force_limit = model.forceLimit()(0);
+  // Virtual work: F_tip |d tip| = F_act |d l_x|, on average over the working range.
+  m_specifications.m_maxLinearForce = force_limit / tip_per_length;
+  m_specifications.m_maxAngularTorque = 0.0;
+  // What an application may ask of the proxy: the coupling stiffness seen at the fingertip.
+  m_specifications.m_maxLinearStiffness = m_couplingStiffness / tip_lever_sq;
+  m_specifications.m_maxAngularStiffness = 0.0;
+  m_specifications.m_maxLinearDamping = 0.0;  // a position-driven finger: nothing to damp
+  m_specifications.m_maxAngularDamping = 0.0;
+  m_specifications.m_workspaceRadius = radius;
+  m_specifications.m_sensedPosition = true;
+  m_specifications.m_sensedRotation = false;
+  m_specifications.m_actuatedPosition = true;
+  m_specifications.m_actuatedRotation = false;
+  m_specifications.m_rightHand = true;
+  m_specifications.m_leftHand = false;
+
+  uhaptics::UnderactuatedGains<Model> gains;
+  gains.Zx = m_couplingStiffness * uhaptics::Mat2::Identity();
+  gains.Zq = Model::ActuatorVector::Constant(m_couplingStiffness * lever_sq).asDiagonal();  // Z_x seen at l_x
+  gains.force_limit = model.forceLimit();
+  m_renderer = std::make_unique<Renderer>(model, gains);
+}
+
+cExoFingerDevice::~cExoFingerDevice() { close(); }
+
+uhaptics::Vec2 cExoFingerDevice::fingertip(const Model::TaskVector& a_x) const noexcept {
+  uhaptics::ExoFingerPoints points;
+  m_model->points(a_x, points);
+  return points.fingertip;
+}
+
+uhaptics::Vec3 cExoFingerDevice::toDevice(const uhaptics::Vec2& a_handPoint) const noexcept {
+  const uhaptics::Vec2 p = a_handPoint - m_centre;
+  return uhaptics::Vec3(0.0, p.x(), -p.y());  // distal -> +y, palmar -> -z
+}
+
+void cExoFingerDevice::startBackend() {
+  if (m_selection.backend != "sim") throw uhaptics::Error("the finger exoskeleton has no '" + m_selection.backend + "' backend");
+  const Model& model = *m_model;
+  // The user: flexion-extension cycles for half an hour (the sim's longest; then the finger rests),
+  // or a finger held still when the hand is off.
+  uhaptics::FingerTrajectory trajectory =
+      getScriptedHandEnabled()
+          ? uhaptics::FingerTrajectory::synthesized(model, 1800.0, m_selection.hand.lap_time, 20.0)
+          : uhaptics::FingerTrajectory::fromSamples(model, {0.0, 1.0},
+                                                    {0.5 * (model.taskLower() + model.taskUpper()),
+                                                     0.5 * (model.taskLower() + model.taskUpper())},
+                                                    "finger at rest");
+  uhaptics::ExoFingerSimOptions options;
+  options.update_rate_hz = 1.0 / getServoPeriod();
+  options.force_loop_lag = m_selection.option("force_loop_lag", 1.0, 0.0, 1.0) != 0.0;
+  m_sim = std::make_unique<uhaptics::ExoFingerSim>(model, std::move(trajectory), options);
+  m_renderer->reset();
+  uhaptics::update(model, m_sim->state().q, m_data);
+  m_position = toDevice(m_data.points.fingertip);
+  m_velocity.setZero();
+  m_actuator.setZero();
+}
+
+void cExoFingerDevice::stopBackend() noexcept {
+  m_actuator.setZero();
+  if (m_sim) m_sim->command(m_actuator);
+}
+
+uhaptics::Fault cExoFingerDevice::servoTick(const uhaptics::Vec3& a_force, const uhaptics::Vec3&,
+                                            const uhaptics::Vec3&, double a_dt, double& a_outputMagnitude) noexcept {
+  const Model& model = *m_model;
+  uhaptics::update(model, m_sim->state().q, m_data);
+  // The proxy pull in the finger plane (device y, z) -> hand frame -> finger-joint torque.
+  const uhaptics::Vec2 f_hand(a_force.y(), -a_force.z());
+  Model::TaskVector x_proxy = m_data.x;
+  if (!f_hand.isZero(0.0)) {
+    const uhaptics::Mat2 Jtip =
+        uhaptics::centralDifferenceJacobian([&](const uhaptics::Vec2& y) { return fingertip(y); }, m_data.x);
+    x_proxy += (Jtip.transpose() * f_hand) / m_couplingStiffness;
+  }
+  const uhaptics::Fault fault = m_renderer->tick(m_data.q, x_proxy, m_actuator);
+  m_sim->command(m_actuator);
+  m_sim->step();
+  a_outputMagnitude = std::abs(m_actuator(0));
+  uhaptics::update(model, m_sim->state().q, m_data);
+  const uhaptics::Vec3 position = toDevice(m_data.points.fingertip);
+  m_velocity = (position - m_position) / a_dt;
+  m_position = position;
+  return fault != uhaptics::Fault::kNone ? fault : m_sim->state().fault;
+}
+
+void cExoFingerDevice::readState(uhaptics::Vec3& a_position, uhaptics::Mat3& a_rotation,
+                                 uhaptics::Vec3& a_linearVelocity, uhaptics::Vec3& a_angularVelocity) noexcept {
+  a_position = m_position;
+  a_rotation.setIdentity();
+  a_linearVelocity = m_velocity;
+  a_angularVelocity.setZero();
+}
+
+int cExoFingerDevice::readJointAngles(double a_q[C_MAX_DOF]) noexcept {
+  a_q[0] = m_data.q(0);  // l_x [m]
+  a_q[1] = m_data.q(1);  // q_B [rad]
+  return 2;
+}
+
+uhaptics::Vec2 cExoFingerDevice::getFingerAngles() {
+  std::lock_guard<std::mutex> lock(deviceMutex());
+  return m_data.x;
+}
+
+uhaptics::ExoFingerPoints cExoFingerDevice::getFingerPoints() {
+  std::lock_guard<std::mutex> lock(deviceMutex());
+  return m_data.points;
+}
+
+double cExoFingerDevice::getActuatorForce() {
+  std::lock_guard<std::mutex> lock(deviceMutex());
+  return m_actuator(0);
+}
+
+uhaptics::Vec2 cExoFingerDevice::getFingerTorque() {
+  std::lock_guard<std::mutex> lock(deviceMutex());
+  return m_sim ? m_sim->state().finger_torque : uhaptics::Vec2::Zero();
+}
+
+}  // namespace chai3d

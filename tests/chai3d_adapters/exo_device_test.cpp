@@ -1,0 +1,166 @@
+// cExoFingerDevice on the simulated backend with a stock CHAI3D world and cToolCursor (no graphics).
+#include <catch2/catch.hpp>
+#include <cmath>
+
+#include "chai3d.h"
+#include "uhaptics/chai3d/CExoFingerDevice.hpp"
+#include "uhaptics/core/passivity_observer.hpp"
+#include "uhaptics/tools/alloc_probe.hpp"
+
+using namespace chai3d;
+
+namespace {
+
+uhaptics::DeviceSelection exoSelection(bool lag) {
+  uhaptics::DeviceSelection s;
+  s.device = "exo";
+  s.hand.lap_time = 2.0;  // MCP period; the PIP's is 2/3 of it: the joint motion repeats every 4 s
+  s.options["force_loop_lag"] = lag ? 1.0 : 0.0;
+  return s;
+}
+
+struct Scene {
+  cWorld world;
+  cToolCursor* tool = nullptr;
+  cMesh* floor = nullptr;
+  // A stiff block under the workspace centre: the fingertip dips into it during flexion.
+  Scene(const cGenericHapticDevicePtr& device, bool with_block) {
+    const double r = device->getSpecifications().m_workspaceRadius;
+    if (with_block) {
+      floor = new cMesh();
+      world.addChild(floor);
+      cCreateBox(floor, 4 * r, 4 * r, 2 * r);
+      floor->setLocalPos(0.0, 0.0, -1.2 * r);  // top face at z = -0.2 r
+      floor->createAABBCollisionDetector(0.01);
+      floor->m_material->setStiffness(device->getSpecifications().m_maxLinearStiffness);
+    }
+    tool = new cToolCursor(&world);
+    world.addChild(tool);
+    tool->setHapticDevice(device);
+    tool->setRadius(0.002);
+    tool->setWorkspaceRadius(r);  // world = device coordinates
+  }
+  void tick() {
+    world.computeGlobalPositions(true);
+    tool->updateFromDevice();
+    tool->computeInteractionForces();
+    tool->applyToDevice();
+  }
+};
+
+}  // namespace
+
+TEST_CASE("exo: specification complete and consistent with the model", "[chai3d_adapters][exo]") {
+  auto device = cExoFingerDevice::create(exoSelection(true));
+  const cHapticDeviceInfo info = device->getSpecifications();
+  CHECK(info.m_model == C_HAPTIC_DEVICE_CUSTOM);
+  CHECK_THAT(info.m_modelName, Catch::Contains("finger exoskeleton"));
+  CHECK(info.m_manufacturerName == "uhaptics");
+  // Fingertip force the 50 N actuator can show: the linkage trades force for travel, so it is of
+  // the order of the actuator force divided by the fingertip travel per actuator length (> 1).
+  CHECK(info.m_maxLinearForce > 1.0);
+  CHECK(info.m_maxLinearForce < device->getModel().forceLimit()(0));
+  CHECK(info.m_maxLinearStiffness > 50.0);  // Z_x = 1 N m/rad over a finger's ~7 cm lever
+  CHECK(info.m_maxLinearStiffness < 2000.0);
+  // Workspace: a finger's reach, centimetres.
+  CHECK(info.m_workspaceRadius > 0.01);
+  CHECK(info.m_workspaceRadius < 0.1);
+  CHECK(info.m_sensedPosition);
+  CHECK(info.m_actuatedPosition);
+  CHECK_FALSE(info.m_sensedRotation);
+  CHECK_FALSE(info.m_actuatedRotation);
+  CHECK_FALSE(info.m_sensedGripper);
+  CHECK(info.m_maxGripperForce == 0.0);
+  CHECK(info.m_rightHand);
+}
+
+TEST_CASE("exo: the finger moves in the device's y-z plane and joint angles are reported", "[chai3d_adapters][exo]") {
+  auto device = cExoFingerDevice::create(exoSelection(true));
+  device->setLockStep(true);
+  REQUIRE(device->open());
+  const double r = device->getSpecifications().m_workspaceRadius;
+  double y_min = 1, y_max = -1, z_min = 1, z_max = -1;
+  cVector3d p;
+  for (int i = 0; i < 1000; ++i) {  // one MCP period
+    device->setForce(cVector3d(0, 0, 0));
+    device->getPosition(p);
+    CHECK(p.x() == 0.0);
+    y_min = std::min(y_min, p.y()), y_max = std::max(y_max, p.y());
+    z_min = std::min(z_min, p.z()), z_max = std::max(z_max, p.z());
+  }
+  // Flexion-extension sweeps most of the reachable region (the synthesized cycles keep a margin).
+  CHECK(z_max - z_min > r);
+  CHECK(std::max(std::abs(y_min), std::abs(y_max)) < 1.5 * r);
+  double q[C_MAX_DOF];
+  REQUIRE(device->getJointAnglesRad(q));
+  const auto& model = device->getModel();
+  CHECK(q[0] >= model.jointLower()(0) - 1e-9);  // l_x inside the stroke
+  CHECK(q[0] <= model.jointUpper()(0) + 1e-9);
+}
+
+TEST_CASE("exo: free space renders exactly zero force", "[chai3d_adapters][exo]") {
+  auto device = cExoFingerDevice::create(exoSelection(true));
+  device->setLockStep(true);
+  Scene scene(device, false);
+  REQUIRE(scene.tool->start());
+  for (int i = 0; i < 2000; ++i) {
+    scene.tick();
+    REQUIRE(device->getActuatorForce() == 0.0);
+  }
+  CHECK(device->getSessionStats().contacts == 0);
+}
+
+TEST_CASE("exo: a stock cToolCursor touching a block renders through the subspace proxy, passively",
+          "[chai3d_adapters][exo]") {
+  for (const bool lag : {false, true}) {
+    DYNAMIC_SECTION("force loop lag " << lag) {
+      auto device = cExoFingerDevice::create(exoSelection(lag));
+      device->setLockStep(true);
+      Scene scene(device, true);
+      REQUIRE(scene.tool->start());
+      uhaptics::PassivityObserver<2> port;
+      double peak_force = 0.0, stored = 0.0;
+      const double zq = device->getModel().forceLimit()(0);  // only for scale below
+      (void)zq;
+      // The finger's joint motion repeats every 4 s (2000 ticks at 500 Hz): two cycles.
+      for (int i = 0; i < 4000; ++i) {
+        scene.tick();
+        // Work the device does on the finger: finger-joint torque (what the user feels) times the
+        // finger's joint motion, exactly as sampled.
+        port.update(device->getFingerAngles(), device->getFingerTorque());
+        peak_force = std::max(peak_force, std::abs(device->getActuatorForce()));
+        // Energy the proxy spring stores at its deepest: |F|^2 / (2 k) with CHAI3D's stiffness.
+        const double f = scene.tool->getDeviceGlobalForce().length();
+        stored = std::max(stored, f * f / (2.0 * device->getSpecifications().m_maxLinearStiffness));
+      }
+      const auto stats = device->getSessionStats();
+      CHECK(stats.contacts >= 2);   // one dip per cycle at least
+      CHECK(peak_force > 1.0);      // newtons at the actuator, not numerical dust
+      CHECK(peak_force <= device->getModel().forceLimit()(0));
+      CHECK(stats.faults == 0);
+      INFO("energy out " << port.energyOut() << " J, peak stored " << stored << " J, peak out " << port.peakEnergyOut());
+      // Passive: over whole cycles of a position-driven finger against a static, frictionless
+      // block, the device returns no more energy than it took. A sampled-and-held command lags
+      // half a period (1 ms) and the board's force loop 5 ms; a spring rendered with a lag tau on a
+      // cycle of frequency w returns at most 2 pi w tau of its peak energy per cycle (w = 2 pi/4 s:
+      // 0.6 % for the hold, 3 % with the force loop). Allow twice that.
+      const double allowed = (lag ? 0.06 : 0.012) * 2.0 * stored;
+      CHECK(port.energyOut() <= allowed);
+    }
+  }
+}
+
+TEST_CASE("exo: a servo tick allocates nothing", "[chai3d_adapters][exo]") {
+  auto device = cExoFingerDevice::create(exoSelection(true));
+  device->setLockStep(true);
+  Scene scene(device, true);
+  REQUIRE(scene.tool->start());
+  for (int i = 0; i < 10; ++i) scene.tick();
+  uhaptics::tools::AllocationScope scope;
+  for (int i = 0; i < 1000; ++i) {
+    cVector3d p;
+    device->getPosition(p);
+    device->setForce(cVector3d(0.0, 0.5, -1.0));
+  }
+  CHECK(scope.count() == 0);
+}
