@@ -2,6 +2,7 @@
 // protocol), nonlinear vs linearized subspace proxy, bad input, and the allocation-free tick.
 #include <catch2/catch.hpp>
 #include <cmath>
+#include <cstdint>
 #include <limits>
 
 #include "fig4_protocol.hpp"
@@ -267,4 +268,43 @@ TEST_CASE("a singular Jacobian gives Fault::kSingular and a zero command where J
   CHECK(std::abs(tau(0)) <= 10.0);
   CHECK(ns.tick(q, xp, tau) == Fault::kNone);
   CHECK(tau.allFinite());
+}
+
+TEST_CASE("random states, in and far outside the working range: finite commands within the limit or a fault") {
+  const Model& m = model();
+  auto g = gains(5.0, 2000.0);  // stiff enough that the force limit matters
+  StandardRenderer<Model> st(m, g);
+  NullSpaceRenderer<Model> ns(m, g);
+  LinearizedSubspaceRenderer<Model> lin(m, g);
+  NonlinearSubspaceRenderer<Model> nl(m, g);
+  // Deterministic pseudo-random states: l_x from 0 to 0.3 m (the stroke is 0.112-0.162 m), q_B
+  // over a full turn, proxies anywhere within +-3 rad, so closures break and Jacobians blow up.
+  std::uint64_t seed = 12345;
+  const auto uniform = [&](double lo, double hi) {
+    seed = seed * 6364136223846793005ULL + 1442695040888963407ULL;
+    return lo + (hi - lo) * static_cast<double>(seed >> 11) / 9007199254740992.0;
+  };
+  int faults = 0, commands = 0;
+  for (int k = 0; k < 20000; ++k) {
+    const Model::JointVector q(uniform(0.0, 0.3), uniform(-M_PI, M_PI));
+    const Model::TaskVector xp(uniform(-3.0, 3.0), uniform(-3.0, 3.0));
+    Model::ActuatorVector tau;
+    const auto check = [&](auto& r) {
+      const Fault f = r.tick(q, xp, tau);
+      REQUIRE(tau.allFinite());
+      REQUIRE(std::abs(tau(0)) <= 50.0);
+      if (f != Fault::kNone) {
+        REQUIRE(tau(0) == 0.0);
+        ++faults;
+      } else {
+        ++commands;
+      }
+    };
+    check(st);
+    check(ns);
+    check(lin);
+    check(nl);
+  }
+  WARN("random states: " << commands << " commands, " << faults << " faults (zero command)");
+  CHECK(commands > 0);
 }

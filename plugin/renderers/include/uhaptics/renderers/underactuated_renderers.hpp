@@ -19,9 +19,11 @@
 // d tau / d q (eq. 2, 5, 9) at the latest tick's Jacobian, outside the servo path.
 //
 // Singular configurations: inverses are damped least squares (core regularizedSolve, damping from
-// s_min / s_max < 1e-3 by default), so commands stay bounded through ill-conditioning; a Jacobian
-// that is non-finite or has s_min / s_max below `singular_threshold` (1e-9: rank lost, not just
-// ill-conditioned) is a Fault::kSingular with a zero command.
+// s_min / s_max < 1e-3 by default), so commands stay bounded through ill-conditioning. A non-finite
+// Jacobian is Fault::kSingular for every method; where J itself is inverted (linearized subspace),
+// s_min / s_max below `singular_threshold` (1e-9: rank lost, not just ill-conditioned) is too, and
+// the nonlinear solve reports Fault::kNotConverged (it accepts only undamped final steps). The
+// transpose-based baselines stay finite and bounded without a fault.
 #include <Eigen/Eigenvalues>
 #include <limits>
 #include <string>
