@@ -1,0 +1,105 @@
+#include "uhaptics/backends/simulated_tau.hpp"
+
+#include <Eigen/Cholesky>
+#include <cmath>
+
+#include "uhaptics/core/limits.hpp"
+
+namespace uhaptics {
+
+SimulatedTau::SimulatedTau(const TauModel& model, const SimulatedTauOptions& options)
+    : model_(model), options_(options), data_(model), rng_(options.seed) {
+  if (options_.substeps == 0) options_.substeps = model.simulationSubsteps();
+  if (options_.substeps < 1 || options_.substeps > 1000) throw Error("SimulatedTau: substeps must be in [1, 1000]");
+  if (options_.max_delay_samples < 0 || options_.max_delay_samples > 100)
+    throw Error("SimulatedTau: max_delay_samples must be in [0, 100]");
+  if (!(options_.tool_damping >= 0.0) || !(options_.hand.stiffness >= 0.0) || !(options_.hand.damping >= 0.0))
+    throw Error("SimulatedTau: damping and hand parameters must be >= 0");
+  command_history_.assign(static_cast<std::size_t>(options_.max_delay_samples) + 1, Vec6::Zero());
+  reset(model.homeJoints());
+}
+
+void SimulatedTau::reset(const Vec6& q0) {
+  q_ = q0;
+  qd_.setZero();
+  data_.pose = model_.homePose();
+  if (model_.forward(q_, data_) != Fault::kNone) throw Error("SimulatedTau: forward kinematics fails at the start pose");
+  for (auto& c : command_history_) c.setZero();
+  history_head_ = 0;
+  applied_.setZero();
+  hand_attached_ = false;
+  hand_force_.setZero();
+  time_ = 0.0;
+  quantize();
+}
+
+void SimulatedTau::setHand(const Vec3& position, const Vec3& velocity, const Vec3& acceleration) noexcept {
+  hand_attached_ = true;
+  hand_p_ = position;
+  hand_v_ = velocity;
+  hand_a_ = acceleration;
+}
+
+void SimulatedTau::quantize() noexcept {
+  if (!options_.quantize) {
+    reading_ = q_;
+    return;
+  }
+  const double res = model_.encoderResolution();
+  for (int i = 0; i < 6; ++i) reading_(i) = std::floor(q_(i) / res) * res;
+}
+
+Fault SimulatedTau::step(const Vec6& tau_command, const Vec3& external_force) noexcept {
+  // Transport delay: the plant applies the command issued d samples ago, d ~ U{0..max}.
+  history_head_ = (history_head_ + 1) % command_history_.size();
+  command_history_[history_head_] = tau_command.allFinite() ? tau_command : Vec6::Zero();
+  std::size_t delay = 0;
+  if (options_.max_delay_samples > 0)
+    delay = std::uniform_int_distribution<std::size_t>(0, static_cast<std::size_t>(options_.max_delay_samples))(rng_);
+  applied_ = command_history_[(history_head_ + command_history_.size() - delay) % command_history_.size()];
+  clampSymmetric(applied_, model_.torqueLimit());  // motor saturation
+
+  // data_ holds the forward kinematics at q_ from reset()/the previous step.
+  Fault f = model_.computeDynamicsTerms(q_, qd_, data_);
+  if (f != Fault::kNone) return f;
+  const Eigen::LLT<Mat6> mass(data_.M);
+  const Mat<3, 6> Jp = data_.J.topRows<3>();
+  const Vec3 p0 = data_.pose.head<3>();
+  const Vec6 q0 = q_;
+  const Vec6 drive = applied_ - data_.bias - data_.gravity;
+  const double T = model_.servoPeriod();
+  const double dt = T / options_.substeps;
+  Vec6 q = q_, qd = qd_;
+  Vec3 hand_sum = Vec3::Zero();
+  for (int s = 0; s < options_.substeps; ++s) {
+    const double t = s * dt;
+    const Vec3 p = p0 + Jp * (q - q0);
+    const Vec3 v = Jp * qd;
+    Vec3 force = external_force - options_.tool_damping * v;
+    if (hand_attached_) {
+      const Vec3 hp = hand_p_ + hand_v_ * t + 0.5 * t * t * hand_a_;
+      const Vec3 hv = hand_v_ + hand_a_ * t;
+      const Vec3 fh = options_.hand.stiffness * (hp - p) + options_.hand.damping * (hv - v);
+      hand_sum += fh;
+      force += fh;
+    }
+    const Vec6 qdd = mass.solve(drive + Jp.transpose() * force);
+    qd += dt * qdd;  // semi-implicit Euler: velocity first
+    q += dt * qd;
+  }
+  if (!q.allFinite() || !qd.allFinite()) return Fault::kNonFiniteResult;
+  q_ = q;
+  qd_ = qd;
+  hand_force_ = hand_sum / options_.substeps;
+  if (hand_attached_) {
+    hand_p_ += hand_v_ * T + 0.5 * T * T * hand_a_;
+    hand_v_ += hand_a_ * T;
+  }
+  time_ += T;
+  // Keep pose/J current for observers (warm-started, usually 1-2 Newton iterations).
+  f = model_.forward(q_, data_);
+  quantize();
+  return f;
+}
+
+}  // namespace uhaptics

@@ -1,0 +1,116 @@
+#include "uhaptics/models/tau_kinematics.hpp"
+
+#include <Eigen/Geometry>
+#include <cmath>
+#include <string>
+
+#include "uhaptics/models/param_file.hpp"
+
+namespace uhaptics {
+
+PoseRotation::PoseRotation(const Vec6& pose) noexcept {
+  const double ca = std::cos(pose(3)), sa = std::sin(pose(3));
+  const double cb = std::cos(pose(4)), sb = std::sin(pose(4));
+  const double cg = std::cos(pose(5)), sg = std::sin(pose(5));
+  Mat3 Rx, Ry, Rz, dRx, dRy, dRz;
+  Rx << 1, 0, 0, 0, ca, -sa, 0, sa, ca;
+  Ry << cb, 0, sb, 0, 1, 0, -sb, 0, cb;
+  Rz << cg, -sg, 0, sg, cg, 0, 0, 0, 1;
+  dRx << 0, 0, 0, 0, -sa, -ca, 0, ca, -sa;
+  dRy << -sb, 0, cb, 0, 0, 0, -cb, 0, -sb;
+  dRz << -sg, -cg, 0, cg, -sg, 0, 0, 0, 0;
+  R = Rz * Ry * Rx;
+  dR[0] = Rz * Ry * dRx;
+  dR[1] = Rz * dRy * Rx;
+  dR[2] = dRz * Ry * Rx;
+}
+
+Mat<3, 6> PoseRotation::pointJacobian(const Vec3& c) const noexcept {
+  Mat<3, 6> S;
+  S.leftCols<3>().setIdentity();
+  for (int k = 0; k < 3; ++k) S.col(3 + k) = dR[k] * c;
+  return S;
+}
+
+RusLegKinematics::RusLegKinematics(const std::array<Leg, 6>& legs) : legs_(legs) {
+  for (int i = 0; i < 6; ++i) {
+    Leg& l = legs_[i];
+    const std::string name = "leg" + std::to_string(i + 1);
+    if (!(l.link_length > 0.0) || !(l.rod_length > 0.0)) throw Error("TAU kinematics: " + name + " has a non-positive length");
+    if (std::abs(l.axis.norm() - 1.0) > 1e-3 || std::abs(l.zero_direction.norm() - 1.0) > 1e-3)
+      throw Error("TAU kinematics: " + name + " axis and zero_direction must be unit vectors");
+    if (std::abs(l.axis.dot(l.zero_direction)) > 1e-3)
+      throw Error("TAU kinematics: " + name + " zero_direction must be perpendicular to its axis");
+    if (l.branch != 1 && l.branch != -1) throw Error("TAU kinematics: " + name + " branch must be +1 or -1");
+    l.axis.normalize();
+    l.zero_direction = (l.zero_direction - l.zero_direction.dot(l.axis) * l.axis).normalized();
+    l.lift_direction = l.axis.cross(l.zero_direction);
+  }
+}
+
+std::shared_ptr<const RusLegKinematics> RusLegKinematics::fromParams(const ParamFile& params) {
+  std::array<Leg, 6> legs;
+  for (int i = 0; i < 6; ++i) {
+    const std::string k = "legs/leg" + std::to_string(i + 1) + "/";
+    Leg& l = legs[i];
+    l.base = params.vector<3>(k + "base", -0.5, 0.5);
+    l.axis = params.vector<3>(k + "axis", -1.0, 1.0);
+    l.zero_direction = params.vector<3>(k + "zero_direction", -1.0, 1.0);
+    l.link_length = params.number(k + "link_length", 1e-3, 0.5);
+    l.rod_length = params.number(k + "rod_length", 1e-3, 0.5);
+    l.platform_point = params.vector<3>(k + "platform_point", -0.2, 0.2);
+    l.branch = static_cast<int>(params.integer(k + "branch", -1, 1));
+  }
+  try {
+    return std::make_shared<const RusLegKinematics>(legs);
+  } catch (const Error& e) {
+    params.fail(e.what());
+  }
+}
+
+Fault RusLegKinematics::inverse(const Vec6& pose, Vec6& q) const noexcept {
+  if (!pose.allFinite()) return Fault::kNonFiniteInput;
+  const PoseRotation rot(pose);
+  const Vec3 p = pose.head<3>();
+  for (int i = 0; i < 6; ++i) {
+    const Leg& l = legs_[i];
+    const Vec3 d = p + rot.R * l.platform_point - l.base;
+    // |d - L1 (cos q u + sin q w)|^2 = L2^2
+    const double A = d.dot(l.zero_direction), B = d.dot(l.lift_direction);
+    const double C = (d.squaredNorm() + l.link_length * l.link_length - l.rod_length * l.rod_length) / (2.0 * l.link_length);
+    const double rho = std::hypot(A, B);
+    // Margin keeps the leg away from the fully stretched/folded (singular) configuration.
+    if (!(rho > 0.0) || std::abs(C) > rho * (1.0 - 1e-9)) return Fault::kOutOfRange;
+    q(i) = std::atan2(B, A) + l.branch * std::acos(C / rho);
+    if (q(i) > M_PI) q(i) -= 2.0 * M_PI;
+    if (q(i) < -M_PI) q(i) += 2.0 * M_PI;
+  }
+  return Fault::kNone;
+}
+
+void RusLegKinematics::constraints(const Vec6& pose, const Vec6& q, Vec6& g, Mat6& dg_dpose, Mat6& dg_dq) const noexcept {
+  const PoseRotation rot(pose);
+  const Vec3 p = pose.head<3>();
+  dg_dq.setZero();
+  for (int i = 0; i < 6; ++i) {
+    const Leg& l = legs_[i];
+    const double c = std::cos(q(i)), s = std::sin(q(i));
+    const Vec3 tip = l.base + l.link_length * (c * l.zero_direction + s * l.lift_direction);
+    const Vec3 dtip = l.link_length * (-s * l.zero_direction + c * l.lift_direction);
+    const Vec3 d = p + rot.R * l.platform_point - tip;
+    // Scaled so that g is a length error: (|d|^2 - L2^2) / (2 L2) ~ |d| - L2 near the solution.
+    const double inv = 1.0 / l.rod_length;
+    g(i) = 0.5 * (d.squaredNorm() - l.rod_length * l.rod_length) * inv;
+    dg_dpose.row(i) = inv * d.transpose() * rot.pointJacobian(l.platform_point);
+    dg_dq(i, i) = -inv * d.dot(dtip);
+  }
+}
+
+void RusLegKinematics::linkPoint(int joint, double qj, double radius, Vec3& point, Vec3& dpoint) const noexcept {
+  const Leg& l = legs_[joint];
+  const double c = std::cos(qj), s = std::sin(qj);
+  point = l.base + radius * (c * l.zero_direction + s * l.lift_direction);
+  dpoint = radius * (-s * l.zero_direction + c * l.lift_direction);
+}
+
+}  // namespace uhaptics

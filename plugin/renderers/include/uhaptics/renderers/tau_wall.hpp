@@ -1,0 +1,192 @@
+#pragma once
+// Wall renderers for the TAU device (paper 001): the LQR position-control wall and the spring-wall
+// baseline. Both are servo-rate classes with preallocated state; tick() never allocates or throws,
+// and a bad input yields a Fault with a zero torque command.
+//
+// The environment (CHAI3D's proxy algorithm, or the study's flat wall) describes the constraint as
+// a SurfaceContact: a point on the surface and its outward unit normal (locally a plane), so any
+// surface the environment constrains can be rendered, not only z = 0.
+#include <Eigen/LU>
+
+#include "uhaptics/core/fault.hpp"
+#include "uhaptics/core/types.hpp"
+#include "uhaptics/models/tau_model.hpp"
+
+namespace uhaptics {
+
+struct SurfaceContact {
+  bool active = false;            // the environment reports the tool at or inside the surface
+  Vec3 point = Vec3::Zero();      // a point of the surface near the tool (the proxy)
+  Vec3 normal = Vec3::UnitZ();    // outward unit normal there
+};
+
+struct WallCommand {
+  Vec6 torque = Vec6::Zero();     // joint torques, finite and within the device limits
+  Fault fault = Fault::kNone;
+  bool in_contact = false;
+  bool saturated = false;
+  double penetration = 0.0;       // depth below the surface (m), 0 outside
+};
+
+// --- LQR design for the wall --------------------------------------------------------------------
+
+/// Paper 001's weights: Q = diag(w_velocity I6, w_position I6, w_integral I6), R = w_torque I6.
+struct LqrWallWeights {
+  double velocity = 1.0;
+  double position = 1e3;
+  double integral = 1e7;
+  double torque = 1.0;
+};
+
+/// Steady-state Kalman filter that estimates (qdot, q, d) from the quantized encoders: joint
+/// velocity cannot be differentiated from 4096-count encoders (one count per servo period is
+/// 1.5 rad/s, which the LQR's velocity gain would turn into newton-metres of noise). d is an input
+/// disturbance torque (the user's force through J^T), modelled as a random walk, so that a steady
+/// push does not bias the velocity estimate.
+struct ObserverNoise {
+  double velocity_process = 1e-3;  // rad/s per sample (unmodelled accelerations)
+  double disturbance_process = 0.005;  // N m per sample (how fast the user's push may change)
+  double position_process = 1e-7;  // rad per sample (keeps the filter DARE well posed)
+  double quantization = 0.0;       // encoder std (rad); 0: resolution / sqrt(12) of the model
+};
+
+struct LqrWallGains {
+  Mat<6, 12> Kc = Mat<6, 12>::Zero();  // on (qdot, q)
+  Mat6 Ki = Mat6::Zero();              // on the integral of (r - q)
+  Mat6 Ki_inverse = Mat6::Zero();      // for bumpless entry
+  double period = 1e-3;
+  double fastest_pole_rad_s = 0.0;
+  double dare_residual = 0.0;
+  int dare_iterations = 0;
+  Vec6 operating_pose = Vec6::Zero();
+  Vec6 operating_joints = Vec6::Zero();
+  Vec6 operating_torque = Vec6::Zero();  // gravity at the operating point (linearization input)
+  // Observer: x = (qdot, q - q_op, d), x+ = Ao x + Bo (u - u_op), y = q - q_op.
+  Mat<18, 18> observer_A = Mat<18, 18>::Zero();
+  Mat<18, 6> observer_B = Mat<18, 6>::Zero();
+  Mat<18, 6> observer_gain = Mat<18, 6>::Zero();  // current-estimate Kalman gain
+};
+
+/// Linearize the model at the operating pose (at rest, holding gravity), augment with integrators,
+/// ZOH-discretize at the model's servo period, solve the DARE, split the gain. Throws Error (e.g.
+/// unreachable pose, failed DARE). Set-up code, but fast enough to redesign within one servo period.
+LqrWallGains designLqrWall(const TauModel& model, const Vec6& operating_pose, const LqrWallWeights& weights = {},
+                           const ObserverNoise& noise = {});
+
+/// The joint-space core of the LQR wall: observer + integral states + u = -Kc e - Ki x_i.
+/// Allocation-free; used by the wall renderer and by the step-reference/force-step checks.
+class LqrJointRegulator {
+ public:
+  explicit LqrJointRegulator(const LqrWallGains& gains) : gains_(gains) {}
+  void setGains(const LqrWallGains& gains) noexcept { gains_ = gains; }
+  /// Observer at rest at the measured joints, integrator cleared.
+  void reset(const Vec6& q_measured) noexcept;
+  /// Observer update with the new measurement (call once per tick, before control()).
+  void observe(const Vec6& q_measured) noexcept;
+  /// The torque actually applied this tick (after saturation), for the next prediction.
+  void applied(const Vec6& torque) noexcept { last_torque_ = torque; }
+  Vec6 velocity() const noexcept { return estimate_.head<6>(); }
+  Vec6 position() const noexcept { return gains_.operating_joints + estimate_.segment<6>(6); }
+  Vec6 disturbance() const noexcept { return estimate_.tail<6>(); }
+  /// -Kc e - Ki x_i for the error e = (qdot - qdot_ref, q - r).
+  Vec6 control(const Vec<12>& error) const noexcept { return -gains_.Kc * error - gains_.Ki * integral_; }
+  /// x_i += T (r - q) = -T (q - r).
+  void integrate(const Vec6& position_error) noexcept { integral_ -= gains_.period * position_error; }
+  /// Bumpless start: x_i such that control(error) = 0.
+  void startBumpless(const Vec<12>& error) noexcept { integral_ = -gains_.Ki_inverse * (gains_.Kc * error); }
+  void clearIntegral() noexcept { integral_.setZero(); }
+  const Vec6& integral() const noexcept { return integral_; }
+  const LqrWallGains& gains() const noexcept { return gains_; }
+
+ private:
+  LqrWallGains gains_;
+  Vec<18> estimate_ = Vec<18>::Zero();
+  Vec6 integral_ = Vec6::Zero();
+  Vec6 last_torque_ = Vec6::Zero();
+};
+
+// --- renderers ----------------------------------------------------------------------------------
+
+/// Shared per-tick front end: validated inputs, forward kinematics (or a caller-supplied pose),
+/// velocity by backward difference of the encoder readings, gravity compensation.
+class TauServoFrontEnd {
+ public:
+  explicit TauServoFrontEnd(const TauModel& model);
+  void reset() noexcept;
+  /// Returns kNone or the fault that forces a zero command.
+  Fault update(const Vec6& q, const SurfaceContact& contact, const Vec6* pose) noexcept;
+  const TauModel& model() const noexcept { return model_; }
+  TauData& data() noexcept { return data_; }
+  const Vec6& q() const noexcept { return q_; }
+  const Vec6& qd() const noexcept { return qd_; }
+  const Vec6& pose() const noexcept { return data_.pose; }
+  /// Signed distance of the tool centre point above the contact plane (m).
+  double signedDistance(const SurfaceContact& c) const noexcept { return c.normal.dot(data_.pose.head<3>() - c.point); }
+
+ private:
+  const TauModel& model_;
+  TauData data_;
+  Vec6 q_ = Vec6::Zero(), qd_ = Vec6::Zero();
+  bool has_previous_ = false;
+};
+
+class LqrWallRenderer {
+ public:
+  struct Options {
+    // Release when the tool is this far above the surface: about two encoder counts at the tool, so
+    // quantization alone never releases a held contact.
+    double release_distance = 2e-4;
+    bool gravity_compensation = true;
+    // true: the reference follows the tool along the surface (the tool slides, only the normal
+    // motion is held); false: paper 001's fixed reference, the whole pose is held at the entry point.
+    bool follow_tangentially = true;
+    // true: push only (release when the tool leaves the surface and the controller would pull);
+    // false: paper 001's position hold, bilateral while in contact (used by the study).
+    bool unilateral = true;
+  };
+  LqrWallRenderer(const TauModel& model, const LqrWallGains& gains, const Options& options);
+  LqrWallRenderer(const TauModel& model, const LqrWallGains& gains) : LqrWallRenderer(model, gains, Options{}) {}
+  void reset() noexcept;
+  /// Swap in gains designed at a new operating point (e.g. each new contact), keeping the state.
+  void setGains(const LqrWallGains& gains) noexcept { regulator_.setGains(gains); }
+  /// pose: the caller's forward-kinematics result for q (nullptr: computed here).
+  const WallCommand& tick(const Vec6& q, const SurfaceContact& contact, const Vec6* pose = nullptr) noexcept;
+  const WallCommand& command() const noexcept { return cmd_; }
+  const Vec6& reference() const noexcept { return reference_; }
+  const Vec6& integralState() const noexcept { return regulator_.integral(); }
+  const LqrJointRegulator& regulator() const noexcept { return regulator_; }
+
+ private:
+  const WallCommand& fail(Fault f) noexcept;
+  TauServoFrontEnd front_;
+  LqrJointRegulator regulator_;
+  Options options_;
+  WallCommand cmd_;
+  bool observer_started_ = false;
+  Vec6 reference_ = Vec6::Zero();  // r = IK(contact pose)
+  Vec6 ref_pose_ = Vec6::Zero();
+  Vec3 entry_orientation_ = Vec3::Zero();
+  Vec<12> error_ = Vec<12>::Zero();
+  Eigen::PartialPivLU<Mat6> j_lu_;
+};
+
+class SpringWallRenderer {
+ public:
+  struct Options {
+    double stiffness = 6000.0;  // N/m, paper 001's baseline
+    double damping = 0.0;       // rendered damping B_r (paper: 0, device damping 4 Ns/m instead)
+    bool gravity_compensation = true;
+  };
+  SpringWallRenderer(const TauModel& model, const Options& options);
+  explicit SpringWallRenderer(const TauModel& model) : SpringWallRenderer(model, Options{}) {}
+  void reset() noexcept;
+  const WallCommand& tick(const Vec6& q, const SurfaceContact& contact, const Vec6* pose = nullptr) noexcept;
+  const WallCommand& command() const noexcept { return cmd_; }
+
+ private:
+  TauServoFrontEnd front_;
+  Options options_;
+  WallCommand cmd_;
+};
+
+}  // namespace uhaptics

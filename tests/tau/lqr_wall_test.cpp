@@ -1,0 +1,152 @@
+#include <Eigen/Eigenvalues>
+#include <catch2/catch.hpp>
+#include <cmath>
+#include <limits>
+
+#include "uhaptics/backends/simulated_tau.hpp"
+#include "uhaptics/renderers/tau_wall.hpp"
+#include "uhaptics/tools/alloc_probe.hpp"
+
+using namespace uhaptics;
+
+namespace {
+const TauModel& model() {
+  static const TauModel m = TauModel::load(std::string(UHAPTICS_PARAMS_DIR) + "/tau.json");
+  return m;
+}
+const LqrWallGains& gains() {
+  static const LqrWallGains g = designLqrWall(model(), model().homePose());
+  return g;
+}
+SurfaceContact wallAt(const Vec6& pose) {
+  SurfaceContact c;
+  c.active = true;
+  c.point = Vec3(pose(0), pose(1), 0.0);
+  c.normal = Vec3::UnitZ();
+  return c;
+}
+}  // namespace
+
+TEST_CASE("LQR wall design with the paper's weights: fastest pole ~2480 rad/s, verified DARE") {
+  const LqrWallGains& g = gains();
+  // Paper: "around 2480 rad/s"; our masses are assumed, the inertia chosen to match it (tau.json).
+  CHECK(g.fastest_pole_rad_s == Approx(2480.0).epsilon(0.05));
+  CHECK(g.dare_residual < 1e-10);
+  CHECK(g.Kc.allFinite());
+  CHECK((g.Ki * g.Ki_inverse - Mat6::Identity()).norm() < 1e-9);
+  // The observer must be stable: the estimation error dynamics (I - L C) A have |z| < 1.
+  Mat<6, 18> C = Mat<6, 18>::Zero();
+  C.block<6, 6>(0, 6).setIdentity();
+  const Mat<18, 18> E = (Mat<18, 18>::Identity() - g.observer_gain * C) * g.observer_A;
+  CHECK(E.eigenvalues().cwiseAbs().maxCoeff() < 1.0);
+}
+
+TEST_CASE("LQR wall design rejects unreachable operating points with a clear error") {
+  Vec6 far = model().homePose();
+  far(2) = 0.5;
+  CHECK_THROWS_WITH(designLqrWall(model(), far), Catch::Contains("outside the reachable workspace"));
+  LqrWallWeights w;
+  w.torque = 0.0;
+  CHECK_THROWS_AS(designLqrWall(model(), model().homePose(), w), Error);
+}
+
+TEST_CASE("Bad input to the wall renderers: a Fault and a zero torque, never NaN") {
+  LqrWallRenderer lqr(model(), gains());
+  SpringWallRenderer spring(model());
+  const Vec6 q = model().homeJoints();
+  const SurfaceContact contact = wallAt(model().homePose());
+  SECTION("non-finite joint reading") {
+    Vec6 bad = q;
+    bad(3) = std::numeric_limits<double>::quiet_NaN();
+    CHECK(lqr.tick(bad, contact).fault == Fault::kNonFiniteInput);
+    CHECK(lqr.command().torque.isZero());
+    CHECK(spring.tick(bad, contact).fault == Fault::kNonFiniteInput);
+    CHECK(spring.command().torque.isZero());
+  }
+  SECTION("non-finite or non-unit surface normal") {
+    SurfaceContact c = contact;
+    c.normal = Vec3(0, 0, 2);
+    CHECK(lqr.tick(q, c).fault == Fault::kNonFiniteInput);
+    CHECK(lqr.command().torque.isZero());
+    c.normal = Vec3(0, std::nan(""), 1);
+    CHECK(spring.tick(q, c).fault == Fault::kNonFiniteInput);
+    CHECK(spring.command().torque.isZero());
+  }
+  SECTION("joints with no forward-kinematics solution") {
+    const Vec6 impossible = Vec6::Constant(2.5);
+    CHECK(lqr.tick(impossible, contact).fault != Fault::kNone);
+    CHECK(lqr.command().torque.isZero());
+  }
+  SECTION("unreachable reference: surface far below the workspace") {
+    SurfaceContact c = contact;
+    c.point = Vec3(0, 0, 0.3);  // the tool is 0.3 m 'inside': the projected reference is unreachable
+    CHECK(lqr.tick(q, c).fault == Fault::kOutOfRange);
+    CHECK(lqr.command().torque.isZero());
+    // A valid tick afterwards recovers.
+    CHECK(lqr.tick(q, contact).fault == Fault::kNone);
+    CHECK(lqr.command().torque.allFinite());
+  }
+}
+
+TEST_CASE("Wall renderer ticks are allocation-free and free-space ticks skip the contact work") {
+  SimulatedTau sim(model(), SimulatedTauOptions{});
+  LqrWallRenderer lqr(model(), gains());
+  SpringWallRenderer spring(model());
+  TauData device(model());
+  SurfaceContact contact = wallAt(model().homePose());
+  Vec6 tau = Vec6::Zero();
+  // Warm up (first-use static initialization is allowed to allocate).
+  tau = lqr.tick(sim.encoderReading(), contact).torque;
+  spring.tick(sim.encoderReading(), contact);
+  tools::AllocationScope scope;
+  for (int k = 0; k < 200; ++k) {
+    model().forward(sim.encoderReading(), device);
+    contact.point = Vec3(device.pose(0), device.pose(1), 0.0);
+    tau = lqr.tick(sim.encoderReading(), contact, &device.pose).torque;
+    spring.tick(sim.encoderReading(), contact, &device.pose);
+    sim.step(tau, Vec3(0, 0, k > 50 ? -10.0 : 0.0));
+  }
+  CHECK(scope.count() == 0);
+  CHECK(lqr.command().in_contact);
+  // Free space: inactive contact gives exactly the gravity compensation (no LQR term).
+  SurfaceContact none;
+  LqrWallRenderer fresh(model(), gains());
+  const WallCommand& cmd = fresh.tick(sim.encoderReading(), none);
+  TauData d(model());
+  model().forward(sim.encoderReading(), d);
+  model().computeGravity(sim.encoderReading(), d);
+  CHECK(!cmd.in_contact);
+  CHECK((cmd.torque - d.gravity).norm() < 1e-12);
+}
+
+namespace {
+// Largest penetration under an 8 N step push along -normal into a wall through the start point.
+double stepPenetration(const Vec3& normal) {
+  SimulatedTauOptions so;
+  so.quantize = false;
+  SimulatedTau sim(model(), so);
+  LqrWallRenderer lqr(model(), gains());
+  SurfaceContact c;
+  c.active = true;
+  c.normal = normal;
+  c.point = sim.pose().head<3>();
+  double worst = 0.0;
+  for (int k = 0; k < 1500; ++k) {
+    const WallCommand& cmd = lqr.tick(sim.encoderReading(), c);
+    if (cmd.fault != Fault::kNone) return 1.0;
+    sim.step(cmd.torque, k > 200 ? Vec3(-8.0 * c.normal) : Vec3::Zero());
+    worst = std::max(worst, -c.normal.dot(sim.pose().head<3>() - c.point));
+  }
+  return worst;
+}
+}  // namespace
+
+TEST_CASE("Any surface: a tilted wall is held along its own normal") {
+  const double flat = stepPenetration(Vec3::UnitZ());
+  const double tilted = stepPenetration(Vec3(std::sin(M_PI / 6), 0, std::cos(M_PI / 6)));
+  WARN("8 N step, sliding-mode LQR wall: flat " << flat * 1e3 << " mm, tilted 30 deg " << tilted * 1e3 << " mm");
+  // A step (not a ramp) in the sliding mode: first impact within 2 mm on both (measured 0.56 and
+  // 1.32 mm: the device is stiffer along z than along x, condition number ~14 at the centre).
+  CHECK(flat < 2e-3);
+  CHECK(tilted < 2e-3);
+}

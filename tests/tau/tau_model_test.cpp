@@ -1,0 +1,118 @@
+#include "uhaptics/models/tau_model.hpp"
+
+#include <Eigen/Eigenvalues>
+#include <catch2/catch.hpp>
+#include <cmath>
+
+#include "uhaptics/core/finite_difference.hpp"
+#include "uhaptics/core/kinematic_model.hpp"
+#include "uhaptics/models/param_file.hpp"
+
+using namespace uhaptics;
+
+namespace {
+const TauModel& model() {
+  static const TauModel m = TauModel::load(std::string(UHAPTICS_PARAMS_DIR) + "/tau.json");
+  return m;
+}
+}  // namespace
+
+TEST_CASE("TAU model satisfies the kinematic-model interface") { STATIC_REQUIRE(kIsKinematicModel<TauModel>); }
+
+TEST_CASE("TAU workspace: 50 mm cube x +-10 deg reachable, FK inverts IK, Jacobian well conditioned") {
+  const TauModel& m = model();
+  TauData data(m);
+  const double h = m.workspaceHalfSide(), a = m.workspaceHalfAngle();
+  double worst_cond = 0.0, worst_roundtrip = 0.0;
+  int worst_iterations = 0, poses = 0;
+  // 5^3 positions x 3^3 orientations (corners included): 3375 poses.
+  for (int ix = 0; ix < 5; ++ix)
+    for (int iy = 0; iy < 5; ++iy)
+      for (int iz = 0; iz < 5; ++iz)
+        for (int ia = 0; ia < 27; ++ia) {
+          Vec6 pose;
+          pose << -h + ix * h / 2, -h + iy * h / 2, -h + iz * h / 2, (ia % 3 - 1) * a, ((ia / 3) % 3 - 1) * a,
+              (ia / 9 - 1) * a;
+          Vec6 q;
+          REQUIRE(m.inverse(pose, q) == Fault::kNone);
+          data.pose = m.homePose();  // cold start: the hardest case for Newton
+          REQUIRE(m.forward(q, data) == Fault::kNone);
+          worst_roundtrip = std::max(worst_roundtrip, (data.pose - pose).cwiseAbs().maxCoeff());
+          worst_iterations = std::max(worst_iterations, data.fk_iterations);
+          worst_cond = std::max(worst_cond, TauModel::scaledConditionNumber(data.J, m.characteristicLength()));
+          ++poses;
+        }
+  INFO("poses " << poses << " worst condition " << worst_cond << " worst FK iterations " << worst_iterations);
+  // Newton's quadratic convergence reaches 1e-12 m; 1e-10 allows the pose-level error amplification.
+  CHECK(worst_roundtrip < 1e-10);
+  // Bounded condition number = free of singularities with margin (bound chosen ~2x the measured worst).
+  CHECK(worst_cond < 40.0);
+  CHECK(worst_iterations <= 8);
+  WARN("TAU workspace scan: worst scaled condition number " << worst_cond << ", worst cold-start FK iterations "
+                                                            << worst_iterations);
+}
+
+TEST_CASE("TAU Jacobian matches finite differences of the forward kinematics") {
+  const TauModel& m = model();
+  Vec6 pose;
+  pose << 0.01, -0.02, 0.015, 0.1, -0.05, 0.12;
+  Vec6 q;
+  REQUIRE(m.inverse(pose, q) == Fault::kNone);
+  Mat6 J;
+  m.jacobian(q, J);
+  const Mat6 Jfd = centralDifferenceJacobian(
+      [&](const Vec6& qq) {
+        Vec6 x;
+        m.forward(qq, x);
+        return x;
+      },
+      q);
+  // Central differences with h ~ 6e-6 rad: O(h^2) truncation, FK solved to 1e-12 m.
+  CHECK((J - Jfd).norm() < 1e-6 * J.norm());
+}
+
+TEST_CASE("TAU dynamics: symmetric positive mass matrix, gravity = gradient of potential energy") {
+  const TauModel& m = model();
+  Vec6 pose;
+  pose << -0.015, 0.01, -0.01, 0.05, 0.08, -0.1;
+  Vec6 q;
+  REQUIRE(m.inverse(pose, q) == Fault::kNone);
+  TauData d(m);
+  REQUIRE(m.forward(q, d) == Fault::kNone);
+  REQUIRE(m.computeDynamicsTerms(q, Vec6::Zero(), d) == Fault::kNone);
+  CHECK((d.M - d.M.transpose()).norm() < 1e-14);
+  CHECK(Eigen::SelfAdjointEigenSolver<Mat6>(d.M).eigenvalues().minCoeff() > 0.0);
+  // Potential energy V(q) = -sum m g.x over every lumped mass; the gravity torque is dV/dq.
+  auto potential = [&](const Vec6& qq) {
+    TauData dd(m);
+    m.forward(qq, dd);
+    const PoseRotation rot(dd.pose);
+    double V = 0.0;
+    for (const auto& pm : m.platformMasses()) V -= pm.mass * m.gravityVector().dot(dd.pose.head<3>() + rot.R * pm.body_point);
+    for (int i = 0; i < 6; ++i) {
+      Vec3 p, dp;
+      m.kinematics().linkPoint(i, qq(i), m.linkComRadius()(i), p, dp);
+      V -= m.linkMass()(i) * m.gravityVector().dot(p);
+      m.kinematics().linkPoint(i, qq(i), m.kinematics().linkLength(i), p, dp);
+      V -= 0.5 * m.rodMass()(i) * m.gravityVector().dot(p);
+    }
+    return V;
+  };
+  Vec6 dV;
+  for (int i = 0; i < 6; ++i) {
+    const double h = 1e-6;
+    Vec6 qp = q, qm = q;
+    qp(i) += h;
+    qm(i) -= h;
+    dV(i) = (potential(qp) - potential(qm)) / (2 * h);
+  }
+  // Central difference of V (~0.1 J) with h = 1e-6: error ~1e-9 N m.
+  CHECK((d.gravity - dV).norm() < 1e-7);
+}
+
+TEST_CASE("TAU parameter file errors are reported with the key") {
+  CHECK_THROWS_WITH(TauModel::fromParams(ParamFile::parse(R"({"device":"tau","format_version":1})", "inline")),
+                    Catch::Contains("legs/leg1/base"));
+  CHECK_THROWS_WITH(TauModel::fromParams(ParamFile::parse(R"({"device":"exo","format_version":1})", "inline")),
+                    Catch::Contains("tau"));
+}

@@ -1,0 +1,71 @@
+#pragma once
+// Paper 001's Monte-Carlo wall study on the simulated TAU: scenarios 1 (step force with noise,
+// eq. 13) and 2 (hand model moved with the acceleration profile of eq. 14-15), wall at z = 0, both
+// controllers, optional random delay; metrics D_z1, K_z1, D_zs, K_zs; and the design requirement
+// checks (step reference, force step). Shared by uhaptics-tau-study and the tau tests.
+#include <cstdint>
+#include <vector>
+
+#include "uhaptics/backends/simulated_tau.hpp"
+#include "uhaptics/renderers/tau_wall.hpp"
+
+namespace uhaptics::study {
+
+enum class Controller { kLqr, kSpring };
+enum class Scenario { kStepForce = 1, kHand = 2 };
+const char* name(Controller c);
+
+struct RunSpec {
+  Controller controller = Controller::kLqr;
+  Scenario scenario = Scenario::kStepForce;
+  double x = 0.0, y = 0.0;      // query point on the wall z = 0 (m)
+  std::uint64_t seed = 1;       // F_c, noise and delay draws
+  int max_delay_samples = 0;    // 0..3 in the paper's delay variant
+  bool quantize = true;         // 4096-count encoders (false: ideal joint sensors)
+  double duration = 3.0;        // s
+};
+
+struct StudyParameters {
+  double force_min = 8.0, force_max = 15.0;  // F_c ~ U(8, 15) N
+  double noise_sigma = 0.5;                   // N(0, 0.5) N, per servo sample
+  double spring_stiffness = 6000.0;           // baseline wall, N/m
+  double device_damping = 4.0;                // baseline device damping, N s/m
+  double contact_band = 1e-3;                 // environment reports contact within 1 mm of the wall
+  double min_penetration = 1e-7;              // floor for stiffness = F / D (0.1 um)
+};
+
+struct RunMetrics {
+  double force_level = 0.0;       // F_c (N)
+  double d_z1 = 0.0, k_z1 = 0.0;  // first-impact penetration (m) and stiffness (N/m)
+  double t_z1 = 0.0;
+  double d_zs = 0.0, k_zs = 0.0;  // steady-state mean penetration and stiffness
+  double max_penetration = 0.0;
+  double max_torque = 0.0;        // largest |tau_i| commanded
+  int saturated_ticks = 0;
+  Fault fault = Fault::kNone;
+  double fault_time = -1.0;      // s, when the first fault happened
+  bool fault_in_plant = false;   // the simulated device (not the renderer) failed
+};
+
+struct TraceSample {
+  double t, z, force, tau6;
+  int contact;
+};
+
+/// One 3 s run. `trace` (optional) receives one sample per servo period.
+RunMetrics simulateRun(const TauModel& model, const LqrWallGains& gains, const RunSpec& spec,
+                       const StudyParameters& params = {}, std::vector<TraceSample>* trace = nullptr);
+
+struct StepResponse {
+  double overshoot_percent = 0.0;
+  double rise_time = 0.0;      // 10-90 %
+  double settling_time = 0.0;  // last entry into the 2 % band
+  double max_joint_deviation = 0.0;  // force-step check: max |q - r| (rad)
+};
+
+/// Step in the reference pose (tool z by `step` metres) with the LQR joint regulator, ideal sensor.
+StepResponse stepReferenceResponse(const TauModel& model, const LqrWallGains& gains, const Vec6& pose, double step);
+/// Force step `force` N along -z at the tool while the LQR holds the pose; max joint deviation.
+double forceStepDeviation(const TauModel& model, const LqrWallGains& gains, const Vec6& pose, double force);
+
+}  // namespace uhaptics::study
