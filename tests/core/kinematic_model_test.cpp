@@ -24,3 +24,17 @@ TEST_CASE("the kinematic-model trait accepts models and rejects other types") {
   STATIC_REQUIRE_FALSE(uhaptics::kIsKinematicModel<NotAModel>);
   STATIC_REQUIRE_FALSE(uhaptics::kIsKinematicModel<int>);
 }
+
+namespace {
+struct WithInverse : TwoLink {
+  bool inverse(const uhaptics::Vec2& x, uhaptics::Vec2& q) const noexcept {
+    q = x;
+    return true;
+  }
+};
+}  // namespace
+
+TEST_CASE("the inverse-kinematics capability is detected only where a model has it") {
+  STATIC_REQUIRE(uhaptics::kHasInverseKinematics<WithInverse>);
+  STATIC_REQUIRE_FALSE(uhaptics::kHasInverseKinematics<TwoLink>);
+}

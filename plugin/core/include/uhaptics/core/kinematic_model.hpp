@@ -36,4 +36,18 @@ struct IsKinematicModel<
 template <typename M>
 inline constexpr bool kIsKinematicModel = IsKinematicModel<M>::value;
 
+/// Optional capability: a closed-form inverse  bool inverse(const TaskVector& x, JointVector& q) const
+/// (true when x is reachable). Solvers use it to seed an iteration that a poor start cannot finish.
+template <typename M, typename = void>
+struct HasInverseKinematics : std::false_type {};
+
+template <typename M>
+struct HasInverseKinematics<
+    M, std::void_t<decltype(bool{std::declval<const M&>().inverse(std::declval<const Vec<M::kTask>&>(),
+                                                                 std::declval<Vec<M::kJoints>&>())})>>
+    : std::true_type {};
+
+template <typename M>
+inline constexpr bool kHasInverseKinematics = HasInverseKinematics<M>::value;
+
 }  // namespace uhaptics

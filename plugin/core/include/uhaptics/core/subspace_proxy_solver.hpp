@@ -75,15 +75,33 @@ SubspaceSolveReport solveSubspaceProxy(const Model& model, const Vec<Model::kTas
       // A damped step (ill-conditioned J) can be short without the point being optimal: only an
       // undamped short step proves stationarity (|J dq| = |projection of r on range J|).
       const bool exact_step = !info.damped();
-      q += dq;
-      model.forward(q, x);
-      ++rep.evaluations;
-      r = x_p - x;
-      if (!q.allFinite() || !r.allFinite()) break;
       if (exact_step && rep.last_step < opt.tolerance) {
-        rep.converged = true;
+        // Already stationary: take the (tiny) step and stop.
+        q += dq;
+        model.forward(q, x);
+        ++rep.evaluations;
+        r = x_p - x;
+        rep.converged = q.allFinite() && r.allFinite();
         break;
       }
+      // Backtracking (step halving) keeps a full Gauss-Newton step from leaving the region where
+      // f is defined (e.g. a linkage that cannot assemble) or from increasing the residual on a
+      // far start; near the solution the full step is always accepted (quadratic convergence).
+      double alpha = 1.0;
+      bool accepted = false;
+      for (int halvings = 0; halvings < 20 && !accepted; ++halvings, alpha *= 0.5) {
+        const Vec<N> q_try = q + alpha * dq;
+        model.forward(q_try, x);
+        ++rep.evaluations;
+        const Vec<T> r_try = x_p - x;
+        if (r_try.allFinite() && r_try.squaredNorm() < cost) {
+          q = q_try;
+          r = r_try;
+          cost = r.squaredNorm();
+          accepted = true;
+        }
+      }
+      if (!accepted) break;  // no descent along the Gauss-Newton direction: not converged
     }
     cost = r.squaredNorm();
   } else {

@@ -265,13 +265,30 @@ class NonlinearSubspaceRenderer : public UnderactuatedRendererBase<Model, Nonlin
   Fault computeCommand(const typename Base::JointVector& q, const typename Base::TaskVector& dx,
                        typename Base::ActuatorVector& tau) noexcept {
     auto& d = this->d_;
-    if (!warm_) q_star_ = q;
     const typename Base::TaskVector x_proxy = d.probe + dx;
+    if (!warm_) q_star_ = q;
     d.nonlinear = solveSubspaceProxy(this->model_, x_proxy, q_star_, solver_);
-    // Any solver fault zeroes the command. A finite iterate that merely missed the tolerance is
-    // kept as the next warm start, so the following tick continues the iteration from there.
+    // The warm start (last tick's q*) makes the usual tick one iteration. After a jump of the proxy
+    // a local solve can stall where the joint-space domain of f is not convex (a linkage that
+    // cannot assemble between start and solution). Then solve again from a better seed: the
+    // model's closed-form inverse of the proxy where it has one, else the measured state.
+    if (d.nonlinear.fault == Fault::kNotConverged) {
+      bool reseeded = false;
+      if constexpr (kHasInverseKinematics<Model>) reseeded = this->model_.inverse(x_proxy, q_star_);
+      if (!reseeded && warm_) {
+        q_star_ = q;
+        reseeded = true;
+      }
+      if (reseeded) {
+        const SubspaceSolveReport first = d.nonlinear;
+        d.nonlinear = solveSubspaceProxy(this->model_, x_proxy, q_star_, solver_);
+        d.nonlinear.iterations += first.iterations;
+        d.nonlinear.evaluations += first.evaluations;
+      }
+    }
+    // Any solver fault zeroes the command and drops the warm start.
     if (d.nonlinear.fault != Fault::kNone) {
-      warm_ = d.nonlinear.fault == Fault::kNotConverged && q_star_.allFinite();
+      warm_ = false;
       return d.nonlinear.fault;
     }
     warm_ = true;
