@@ -1,6 +1,7 @@
 #include "uhaptics/chai3d/device_registry.hpp"
 
 #include "uhaptics/chai3d/CExoFingerDevice.hpp"
+#include "uhaptics/chai3d/CTauDevice.hpp"
 
 #include <algorithm>
 #include <cstdlib>
@@ -21,6 +22,8 @@ const std::vector<Entry>& entries() {
   static const std::vector<Entry> table = {
       {"exo", "finger exoskeleton module, subspace proxy (paper 000)", {"sim"},
        [](const DeviceSelection& s, unsigned int n) -> chai3d::cUhapticsDevicePtr { return chai3d::cExoFingerDevice::create(s, n); }},
+      {"tau", "TAU-class 6-DoF parallel device, LQR wall on stiff contact (paper 001)", {"sim"},
+       [](const DeviceSelection& s, unsigned int n) -> chai3d::cUhapticsDevicePtr { return chai3d::cTauDevice::create(s, n); }},
   };
   return table;
 }

@@ -1,0 +1,200 @@
+#include "uhaptics/chai3d/CTauDevice.hpp"
+
+#include <cmath>
+
+#include "uhaptics/core/limits.hpp"
+#include "uhaptics/models/tau_kinematics.hpp"
+
+namespace chai3d {
+namespace {
+
+// Depth the tool must travel into a contact before its stiffness is estimated: four encoder counts
+// at the tool (about 0.05 mm each), so quantization does not fake a stiff surface.
+constexpr double kProbeDepth = 2e-4;  // m
+
+}  // namespace
+
+cTauDevice::cTauDevice(unsigned int a_deviceNumber, const uhaptics::DeviceSelection& a_selection)
+    : cUhapticsDevice(a_deviceNumber, a_selection, 1e-3),
+      m_model(std::make_unique<uhaptics::TauModel>(uhaptics::TauModel::load(paramsDirectory() + "/tau.json"))),
+      m_stiffThreshold(a_selection.option("stiff_threshold", 3000.0, 1.0, 1e6)),
+      m_contactForce(a_selection.option("contact_force", 0.3, 0.01, 10.0)),
+      m_toolDamping(a_selection.option("tool_damping", 0.0, 0.0, 50.0)) {
+  const uhaptics::TauModel& model = *m_model;
+  if (std::abs(model.servoPeriod() - getServoPeriod()) > 1e-12) {
+    throw uhaptics::Error("TAU parameter file: the servo period must be 1 ms (the LQR wall is designed for it)");
+  }
+  m_wallMode = static_cast<int>(a_selection.option("wall", 0.0, 0.0, 2.0));
+  m_centre = model.homePose().head<3>();
+  m_data = std::make_unique<uhaptics::TauData>(model);
+  // LQR gains at the workspace centre (paper 001 linearizes at one operating point).
+  m_lqr = std::make_unique<uhaptics::LqrWallRenderer>(model, uhaptics::designLqrWall(model, model.homePose()));
+
+  // Force the device can produce in any direction at home: tau = J^T [F; 0] within the torque
+  // limits, minimized over a sphere of directions; likewise the torque.
+  uhaptics::Mat6 J;
+  model.jacobian(model.homeJoints(), J);
+  double force = 1e9, torque = 1e9;
+  for (int i = -2; i <= 2; ++i)
+    for (int j = -2; j <= 2; ++j)
+      for (int k = -2; k <= 2; ++k) {
+        if (i == 0 && j == 0 && k == 0) continue;
+        const uhaptics::Vec3 u = uhaptics::Vec3(i, j, k).normalized();
+        uhaptics::Vec6 w = uhaptics::Vec6::Zero();
+        w.head<3>() = u;
+        force = std::min(force, (model.torqueLimit().array() / (J.transpose() * w).array().abs()).minCoeff());
+        w.head<3>().setZero();
+        w.tail<3>() = u;
+        torque = std::min(torque, (model.torqueLimit().array() / (J.transpose() * w).array().abs()).minCoeff());
+      }
+
+  setCommonSpecifications("TAU-class 6-DoF parallel device");
+  m_specifications.m_maxLinearForce = force;
+  m_specifications.m_maxAngularTorque = torque;
+  m_specifications.m_maxLinearStiffness = 6000.0;  // paper 001's spring-wall baseline
+  m_specifications.m_maxAngularStiffness = 1.0;    // assumed: mild rotational springs
+  m_specifications.m_maxLinearDamping = 4.0;       // paper 001: Colgate's bound b > K T / 2 for 6000 N/m at 1 kHz
+  m_specifications.m_maxAngularDamping = 0.01;     // assumed
+  m_specifications.m_workspaceRadius = model.workspaceHalfSide();  // the 50 mm cube's inscribed sphere
+  m_specifications.m_sensedPosition = true;
+  m_specifications.m_sensedRotation = true;
+  m_specifications.m_actuatedPosition = true;
+  m_specifications.m_actuatedRotation = true;
+  m_specifications.m_rightHand = true;
+  m_specifications.m_leftHand = true;
+}
+
+cTauDevice::~cTauDevice() { close(); }
+
+std::string cTauDevice::getRendererName() const {
+  if (m_lqrEngaged.load()) return "LQR wall";
+  return m_wallMode.load() == C_TAU_WALL_SPRING ? "spring (J^T F)" : "spring (J^T F), LQR wall on stiff contact";
+}
+
+void cTauDevice::setWallMode(cWallMode a_mode) { m_wallMode = a_mode; }
+cTauDevice::cWallMode cTauDevice::getWallMode() { return static_cast<cWallMode>(m_wallMode.load()); }
+bool cTauDevice::isLqrWallEngaged() { return m_lqrEngaged.load(); }
+double cTauDevice::getLqrPenetration() {
+  std::lock_guard<std::mutex> lock(deviceMutex());
+  return m_lqr->command().penetration;
+}
+
+void cTauDevice::startBackend() {
+  if (m_selection.backend != "sim") throw uhaptics::Error("TAU has no '" + m_selection.backend + "' backend");
+  uhaptics::SimulatedTauOptions options;
+  options.tool_damping = m_toolDamping;
+  m_sim = std::make_unique<uhaptics::SimulatedTau>(*m_model, options);
+  m_sim->reset(m_model->homeJoints());
+  m_sim->detachHand();  // the scripted hand's force arrives as the external force
+  m_lqr->reset();
+  m_data->pose = m_model->homePose();
+  m_contact = Contact::kFree;
+  m_lqrEngaged = false;
+  m_tau.setZero();
+}
+
+void cTauDevice::stopBackend() noexcept {
+  m_tau.setZero();
+  m_lqrEngaged = false;
+}
+
+void cTauDevice::updateContact(const uhaptics::Vec3& a_force) noexcept {
+  const double magnitude = a_force.norm();
+  const uhaptics::Vec3 tool = m_data->pose.head<3>();
+  const int mode = m_wallMode.load();
+  switch (m_contact) {
+    case Contact::kFree:
+      if (magnitude > m_contactForce && mode != C_TAU_WALL_SPRING) {
+        m_contact = Contact::kProbing;
+        m_onsetPosition = tool;
+        m_onsetForce = magnitude;
+      }
+      break;
+    case Contact::kProbing: {
+      if (magnitude < 0.5 * m_contactForce || mode == C_TAU_WALL_SPRING) {
+        m_contact = Contact::kFree;
+        break;
+      }
+      const uhaptics::Vec3 normal = a_force / magnitude;
+      const double depth = normal.dot(m_onsetPosition - tool);  // travelled into the surface since onset
+      const bool forced = mode == C_TAU_WALL_LQR;
+      if (!forced && depth < kProbeDepth) break;
+      const double stiffness = forced ? m_specifications.m_maxLinearStiffness : (magnitude - m_onsetForce) / depth;
+      if (!forced && stiffness < m_stiffThreshold) break;  // a soft object: the spring renders it
+      // Latch the surface: through the proxy, which sits F / k above the tool along F.
+      m_surface.active = true;
+      m_surface.normal = normal;
+      m_surface.point = tool + a_force / stiffness;
+      m_contact = Contact::kLqr;
+      break;
+    }
+    case Contact::kLqr:
+      // Released by the wall itself once it held the tool (see servoTick); a surface latched but
+      // never reached (the tool withdrew first) is dropped when the force is gone.
+      if (!m_lqrEngaged.load() && magnitude < 0.5 * m_contactForce) {
+        m_contact = Contact::kFree;
+        m_surface.active = false;
+      }
+      break;
+  }
+}
+
+uhaptics::Fault cTauDevice::servoTick(const uhaptics::Vec3& a_force, const uhaptics::Vec3& a_torque,
+                                      const uhaptics::Vec3& a_handForce, double a_dt, double& a_outputMagnitude) noexcept {
+  (void)a_dt;  // the model's servo period (checked equal at construction)
+  const uhaptics::TauModel& model = *m_model;
+  const uhaptics::Vec6& q = m_sim->encoderReading();
+  uhaptics::Fault fault = model.forward(q, *m_data);
+  if (fault == uhaptics::Fault::kNone) {
+    updateContact(a_force);
+    if (m_contact != Contact::kLqr) m_surface.active = false;
+    // The wall renderer runs every tick: its observer must be settled when a contact begins, and
+    // in free space it is the gravity compensation.
+    const uhaptics::WallCommand& wall = m_lqr->tick(q, m_surface, &m_data->pose);
+    fault = wall.fault;
+    m_tau = wall.torque;
+    if (m_contact == Contact::kLqr && !wall.in_contact && m_surface.active && m_lqrEngaged.load()) {
+      m_contact = Contact::kFree;  // the tool left the surface: the wall released it
+      m_surface.active = false;
+    }
+    m_lqrEngaged = m_contact == Contact::kLqr && wall.in_contact;
+    if (!m_lqrEngaged.load()) {
+      uhaptics::Vec6 wrench;
+      wrench << a_force, a_torque;
+      m_tau.noalias() += m_data->J.transpose() * wrench;  // the application's spring (the baseline)
+      uhaptics::scaleIntoBox(m_tau, model.torqueLimit());
+    }
+  }
+  if (fault != uhaptics::Fault::kNone || !m_tau.allFinite()) {
+    m_tau.setZero();
+    if (fault == uhaptics::Fault::kNone) fault = uhaptics::Fault::kNonFiniteResult;
+  }
+  const uhaptics::Fault sim_fault = m_sim->step(m_tau, a_handForce);
+  a_outputMagnitude = m_tau.cwiseAbs().maxCoeff();
+  return fault != uhaptics::Fault::kNone ? fault : sim_fault;
+}
+
+void cTauDevice::readState(uhaptics::Vec3& a_position, uhaptics::Mat3& a_rotation, uhaptics::Vec3& a_linearVelocity,
+                           uhaptics::Vec3& a_angularVelocity) noexcept {
+  if (!m_sim) {
+    a_position.setZero();
+    a_rotation.setIdentity();
+    a_linearVelocity.setZero();
+    a_angularVelocity.setZero();
+    return;
+  }
+  const uhaptics::Vec6& pose = m_sim->pose();
+  a_position = pose.head<3>() - m_centre;
+  a_rotation = uhaptics::PoseRotation(pose).R;
+  a_linearVelocity = m_sim->toolVelocity();
+  // Pose-angle rates; within TAU's +-10 deg they are the angular velocity to within 2 %.
+  a_angularVelocity = (m_data->J * m_sim->qd()).tail<3>();
+}
+
+int cTauDevice::readJointAngles(double a_q[C_MAX_DOF]) noexcept {
+  const uhaptics::Vec6 q = m_sim ? m_sim->q() : m_model->homeJoints();
+  for (int i = 0; i < 6; ++i) a_q[i] = q(i);
+  return 6;
+}
+
+}  // namespace chai3d
