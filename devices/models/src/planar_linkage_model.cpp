@@ -1,0 +1,149 @@
+#include "uhaptics/models/planar_linkage_model.hpp"
+
+#include <sstream>
+
+#include "uhaptics/core/fault.hpp"
+#include "uhaptics/models/param_file.hpp"
+
+namespace uhaptics {
+
+namespace {
+template <int N>
+void requireAll(const Vec<N>& v, double lo, const char* name, const std::string& device) {
+  for (int i = 0; i < N; ++i) {
+    if (!std::isfinite(v(i)) || !(v(i) >= lo)) {
+      std::ostringstream msg;
+      msg << device << ": " << name << "[" << i << "] = " << v(i) << " must be finite and >= " << lo;
+      throw Error(msg.str());
+    }
+  }
+}
+}  // namespace
+
+template <int N>
+PlanarLinkageModel<N>::PlanarLinkageModel(Parameters p) : p_(std::move(p)) {
+  const std::string& d = p_.device;
+  requireAll<N>(p_.link_length, 1e-6, "link_length", d);
+  requireAll<N>(p_.link_mass, 0.0, "link_mass", d);
+  requireAll<N>(p_.link_inertia, 0.0, "link_inertia", d);
+  requireAll<N>(p_.rotor_inertia, 1e-12, "rotor_inertia", d);
+  requireAll<N>(p_.viscous_friction, 0.0, "viscous_friction", d);
+  requireAll<N>(p_.coulomb_friction, 0.0, "coulomb_friction", d);
+  requireAll<N>(p_.torque_limit, 1e-9, "torque_limit", d);
+  if (!p_.coupling.allFinite() || !p_.angle_offset.allFinite() || !p_.base.allFinite() || !p_.home.allFinite())
+    throw Error(d + ": coupling, angle offsets, base and home must be finite");
+  if (!(p_.coulomb_velocity > 0.0) || !std::isfinite(p_.coulomb_velocity))
+    throw Error(d + ": coulomb_velocity must be positive");
+  // Every joint must move some link, or the Jacobian has a zero column everywhere.
+  for (int j = 0; j < N; ++j)
+    if (p_.coupling.col(j).cwiseAbs().maxCoeff() == 0.0)
+      throw Error(d + ": joint " + std::to_string(j) + " moves no link (zero column in coupling)");
+}
+
+template <int N>
+PlanarLinkageModel<N> PlanarLinkageModel<N>::fromFile(const std::string& path, const std::string& device) {
+  const ParamFile f = ParamFile::load(path);
+  f.requireFormat(device, 1);
+  if (f.integer("joints", N, N) != N) f.fail("wrong number of joints");
+  Parameters p;
+  p.device = device;
+  p.link_length = f.vector<N>("kinematics/link_lengths", 1e-3, 10.0);
+  const auto rows = f.numbers("kinematics/coupling", static_cast<std::size_t>(N * N), -10.0, 10.0);
+  for (int i = 0; i < N; ++i)
+    for (int j = 0; j < N; ++j) p.coupling(i, j) = rows[static_cast<std::size_t>(i * N + j)];
+  p.angle_offset = f.vector<N>("kinematics/angle_offsets", -10.0, 10.0);
+  p.base = f.vector<2>("kinematics/base_position", -10.0, 10.0);
+  p.link_mass = f.vector<N>("dynamics/link_masses", 0.0, 100.0);
+  p.link_inertia = f.vector<N>("dynamics/link_inertias", 0.0, 10.0);
+  p.rotor_inertia = f.vector<N>("dynamics/rotor_inertias", 1e-12, 10.0);
+  p.viscous_friction = f.vector<N>("friction/viscous", 0.0, 100.0);
+  p.coulomb_friction = f.vector<N>("friction/coulomb", 0.0, 100.0);
+  p.coulomb_velocity = f.number("friction/coulomb_smoothing_velocity", 1e-6, 1.0);
+  p.torque_limit = f.vector<N>("actuators/torque_limits", 1e-6, 1000.0);
+  p.home = f.vector<N>("configuration/home", -10.0, 10.0);
+  try {
+    return PlanarLinkageModel(std::move(p));
+  } catch (const Error& e) {
+    f.fail(e.what());
+  }
+}
+
+template <int N>
+void PlanarLinkageModel<N>::forward(const JointVector& q, TaskVector& x) const noexcept {
+  JointVector c, s;
+  linkAngles(q, c, s);
+  x = p_.base;
+  x(0) += p_.link_length.dot(c);
+  x(1) += p_.link_length.dot(s);
+}
+
+template <int N>
+void PlanarLinkageModel<N>::jacobian(const JointVector& q, Jacobian& J) const noexcept {
+  JointVector c, s;
+  linkAngles(q, c, s);
+  // Row 0: -sum_i d_i s_i a_ij, row 1: sum_i d_i c_i a_ij.
+  J.row(0) = -(p_.link_length.cwiseProduct(s)).transpose() * p_.coupling;
+  J.row(1) = (p_.link_length.cwiseProduct(c)).transpose() * p_.coupling;
+}
+
+template <int N>
+void PlanarLinkageModel<N>::jacobianDerivative(const JointVector& q, int k, Jacobian& dJ) const noexcept {
+  JointVector c, s;
+  linkAngles(q, c, s);
+  const JointVector w = p_.link_length.cwiseProduct(p_.coupling.col(k));  // d_i a_ik
+  dJ.row(0) = -(w.cwiseProduct(c)).transpose() * p_.coupling;
+  dJ.row(1) = -(w.cwiseProduct(s)).transpose() * p_.coupling;
+}
+
+template <int N>
+void PlanarLinkageModel<N>::massMatrix(const JointVector& q, MassMatrix& M) const noexcept {
+  JointVector c, s;
+  linkAngles(q, c, s);
+  M = p_.rotor_inertia.asDiagonal();
+  Jacobian prefix = Jacobian::Zero();  // sum over links before i of d_l e'(phi_l) a_l^T
+  for (int i = 0; i < N; ++i) {
+    const Vec2 e_perp(-s(i), c(i));
+    const auto a = p_.coupling.row(i);
+    const Jacobian Jc = prefix + (0.5 * p_.link_length(i)) * e_perp * a;
+    M.noalias() += p_.link_mass(i) * Jc.transpose() * Jc;
+    M.noalias() += p_.link_inertia(i) * a.transpose() * a;
+    prefix += p_.link_length(i) * e_perp * a;
+  }
+}
+
+template <int N>
+void PlanarLinkageModel<N>::velocityProductTorque(const JointVector& q, const JointVector& qd,
+                                                  JointVector& c_out) const noexcept {
+  JointVector c, s;
+  linkAngles(q, c, s);
+  const JointVector omega = p_.coupling * qd;
+  c_out.setZero();
+  Jacobian prefix = Jacobian::Zero();
+  Vec2 accel_prefix = Vec2::Zero();  // centripetal acceleration of the start of link i
+  for (int i = 0; i < N; ++i) {
+    const Vec2 e(c(i), s(i));
+    const Vec2 e_perp(-s(i), c(i));
+    const auto a = p_.coupling.row(i);
+    const double half = 0.5 * p_.link_length(i);
+    const Jacobian Jc = prefix + half * e_perp * a;
+    const Vec2 accel = accel_prefix - half * omega(i) * omega(i) * e;
+    c_out.noalias() += p_.link_mass(i) * Jc.transpose() * accel;
+    prefix += p_.link_length(i) * e_perp * a;
+    accel_prefix -= p_.link_length(i) * omega(i) * omega(i) * e;
+  }
+}
+
+template <int N>
+void PlanarLinkageModel<N>::frictionTorque(const JointVector& qd, JointVector& f, JointVector* dfdqd) const noexcept {
+  const double v = p_.coulomb_velocity;
+  for (int i = 0; i < N; ++i) {
+    const double th = std::tanh(qd(i) / v);
+    f(i) = p_.viscous_friction(i) * qd(i) + p_.coulomb_friction(i) * th;
+    if (dfdqd) (*dfdqd)(i) = p_.viscous_friction(i) + p_.coulomb_friction(i) * (1.0 - th * th) / v;
+  }
+}
+
+template class PlanarLinkageModel<3>;
+template class PlanarLinkageModel<4>;
+
+}  // namespace uhaptics

@@ -1,0 +1,35 @@
+#pragma once
+// Optional capabilities a kinematic model (kinematic_model.hpp) may offer beyond the common
+// interface. Renderers use them when present and fall back otherwise:
+//
+//   void jacobianDerivative(const JointVector& q, int k, Jacobian& dJ) const noexcept;  // dJ/dq_k
+//   void massMatrix(const JointVector& q, Mat<kJoints, kJoints>& M) const noexcept;   // joint space
+//
+// Without jacobianDerivative a renderer differentiates jacobian() numerically; without massMatrix
+// it uses the kinematic (identity-metric) null space.
+#include <type_traits>
+#include <utility>
+
+#include "uhaptics/core/kinematic_model.hpp"
+
+namespace uhaptics {
+
+template <typename M, typename = void>
+struct HasJacobianDerivative : std::false_type {};
+template <typename M>
+struct HasJacobianDerivative<M, std::void_t<decltype(std::declval<const M&>().jacobianDerivative(
+                                    std::declval<const Vec<M::kJoints>&>(), 0,
+                                    std::declval<Mat<M::kTask, M::kJoints>&>()))>> : std::true_type {};
+template <typename M>
+inline constexpr bool kHasJacobianDerivative = HasJacobianDerivative<M>::value;
+
+template <typename M, typename = void>
+struct HasMassMatrix : std::false_type {};
+template <typename M>
+struct HasMassMatrix<M, std::void_t<decltype(std::declval<const M&>().massMatrix(
+                            std::declval<const Vec<M::kJoints>&>(), std::declval<Mat<M::kJoints, M::kJoints>&>()))>>
+    : std::true_type {};
+template <typename M>
+inline constexpr bool kHasMassMatrix = HasMassMatrix<M>::value;
+
+}  // namespace uhaptics

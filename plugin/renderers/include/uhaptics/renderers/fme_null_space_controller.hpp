@@ -1,0 +1,280 @@
+#pragma once
+// Force-manipulability null-space controller for redundant haptic devices (paper 003):
+//
+//   tau   = J^T (alpha F) + (I - J^T J#^T) tau_S,      J# = M^-1 J^T (J M^-1 J^T)^-1
+//   tau_S = -beta d nu/dq - K_d q_dot
+//
+// The primary task is the force F a renderer (a virtual wall, a CHAI3D force algorithm) asks for;
+// alpha <= 1 scales it uniformly when an actuator would saturate, so its direction is kept. The
+// secondary task moves the device along its self-motion manifold so that its torque-limit-weighted
+// force manipulability ellipsoid matches a desired one: in free motion and soft contact the minor
+// axis lies along the motion (light, low back-drive friction), in stiff contact the major axis
+// lies along the force (strong). The saturation observer V of the primary torques drives a
+// hysteresis switch between the two with a half-cosine blend (ellipsoid_transition.hpp).
+//
+// Generic over any model satisfying the kinematic-model interface with kJoints > kTask; uses the
+// model's Jacobian derivatives and mass matrix when it has them (model_capabilities.hpp). The
+// tick never throws and never allocates; on bad input it reports a Fault and commands zero torque
+// (non-finite input) or the primary task alone (singular Jacobian, undefined cost), always within
+// the torque limits.
+#include <cmath>
+
+#include "uhaptics/core/ellipsoid_transition.hpp"
+#include "uhaptics/core/fault.hpp"
+#include "uhaptics/core/fme_cost.hpp"
+#include "uhaptics/core/limits.hpp"
+#include "uhaptics/core/null_space.hpp"
+#include "uhaptics/core/saturation_observer.hpp"
+
+namespace uhaptics {
+
+/// Which desired ellipsoid the secondary task tracks.
+enum class FmeEllipsoidMode {
+  kAuto,   // observer-driven switching (the paper's actuator saturation controller)
+  kFree,   // always the free-motion ellipsoid (the paper's case A, eps = 0)
+  kStiff,  // always the stiff-contact ellipsoid (case B, eps = 1)
+};
+
+template <int kTask>
+struct FmeControllerOptions {
+  double mu = 5.0;        // axis scaling: K = mu lambda_max(M_hat_home), zeta = lambda_min(M_hat_home) / mu
+  double beta = 20.0;     // gradient gain [N m per unit of d nu/dq]
+  double damping = 0.1;   // K_d [N m s/rad]
+  double observer_shape = 50.0;  // S of eq. 14 (the paper's Fig. 6 value)
+  EllipsoidTransitionOptions transition;  // eps1 = 0.7, eps2 = 0.95, rho = 0.003, smooth
+  FmeEllipsoidMode mode = FmeEllipsoidMode::kAuto;
+  Vec<kTask> motion_direction = Vec<kTask>::Unit(kTask - 1);  // free-motion minor axis (the palpation axis u)
+  double major_axis = 0.0;  // K override (> 0); 0 = from mu and the home configuration
+  double minor_axis = 0.0;  // zeta override (> 0); 0 = from mu and the home configuration
+  bool dynamically_consistent = true;  // false: kinematic (Moore-Penrose) null space
+  fme::GradientMethod gradient = fme::GradientMethod::kAnalytic;
+  double contact_force_threshold = 1e-6;  // |F| below this counts as free motion [N]
+  double min_inverse_condition = 1e-6;    // lambda_min / lambda_max of J W W J^T below this = singular
+};
+
+/// What one tick computed (for logging and figures).
+template <int kJoints, int kTask>
+struct FmeControllerStatus {
+  Fault fault = Fault::kNone;
+  double observer = 1.0;   // V
+  double omega = 1.0;      // activation (1 = free ellipsoid, 0 = stiff)
+  double cost = 0.0;       // nu
+  double alpha = 1.0;      // force scaling
+  double null_space_scale = 1.0;  // fraction of tau_N kept to stay within the limits
+  bool skipped_contact_work = false;  // free-motion fast path taken
+  Vec<kTask> force = Vec<kTask>::Zero();  // force actually commanded (alpha F)
+  Vec<kJoints> tau_primary = Vec<kJoints>::Zero();
+  Vec<kJoints> tau_null = Vec<kJoints>::Zero();          // applied null-space torque (after limits)
+  Vec<kJoints> tau_null_command = Vec<kJoints>::Zero();  // (I - J^T J#^T) tau_S before the limits
+};
+
+template <class Model>
+class FmeNullSpaceController {
+  static_assert(kIsKinematicModel<Model>, "the FME controller needs a kinematic model");
+  static_assert(Model::kJoints > Model::kTask, "the FME controller needs a redundant device");
+
+ public:
+  static constexpr int N = Model::kJoints;
+  static constexpr int M = Model::kTask;
+  using JointVector = Vec<N>;
+  using TaskVector = Vec<M>;
+  using TaskMatrix = Mat<M, M>;
+  using Options = FmeControllerOptions<M>;
+  using Status = FmeControllerStatus<N, M>;
+
+  /// torque_limits T_i > 0; home: the configuration whose FME sets K and zeta. Throws
+  /// uhaptics::Error on invalid limits, a singular home configuration or invalid options.
+  FmeNullSpaceController(const Model& model, const JointVector& torque_limits, const JointVector& home,
+                         const Options& options = {})
+      : model_(model), limits_(torque_limits) {
+    if (!limits_.allFinite() || !(limits_.minCoeff() > 0.0))
+      throw Error("FME controller: torque limits must be finite and positive");
+    inv_limits_sq_ = fme::inverseSquaredLimits(limits_);
+    Mat<M, N> J;
+    model_.jacobian(home, J);
+    if (!home.allFinite() || !fme::weightedFme(J, inv_limits_sq_, home_fme_, 1e-9))
+      throw Error("FME controller: the home configuration is singular (no force manipulability ellipsoid)");
+    if (setOptions(options) != Fault::kNone)
+      throw Error("FME controller: invalid options (gains must be finite and >= 0, mu > 0, thresholds in "
+                  "[0, 1] with eps1 <= eps2, a non-zero motion direction)");
+    reset();
+  }
+
+  /// Validates and applies options (allowed between ticks, e.g. from a GUI). On invalid options
+  /// returns Fault::kInvalidParameter and keeps the previous ones.
+  Fault setOptions(const Options& o) noexcept {
+    const bool ok = std::isfinite(o.mu) && o.mu > 0.0 && std::isfinite(o.beta) && o.beta >= 0.0 &&
+                    std::isfinite(o.damping) && o.damping >= 0.0 && std::isfinite(o.observer_shape) &&
+                    o.observer_shape > 0.0 && o.transition.valid() && o.motion_direction.allFinite() &&
+                    o.motion_direction.norm() > 0.0 && std::isfinite(o.major_axis) && o.major_axis >= 0.0 &&
+                    std::isfinite(o.minor_axis) && o.minor_axis >= 0.0 && o.contact_force_threshold >= 0.0 &&
+                    o.min_inverse_condition > 0.0 && o.min_inverse_condition < 1.0;
+    if (!ok) return Fault::kInvalidParameter;
+    const fme::EllipsoidScales s = fme::ellipsoidScales(home_fme_, o.mu);
+    const double major = o.major_axis > 0.0 ? o.major_axis : s.major;
+    const double minor = o.minor_axis > 0.0 ? o.minor_axis : s.minor;
+    TaskMatrix free_fme;
+    if (!(major >= minor) || !fme::axisAlignedEllipsoid(o.motion_direction, minor, major, free_fme))
+      return Fault::kInvalidParameter;
+    options_ = o;
+    major_ = major;
+    minor_ = minor;
+    free_fme_ = free_fme;
+    fme::axisAlignedEllipsoid(stiff_direction_, major_, minor_, stiff_fme_);  // direction is never zero
+    return Fault::kNone;
+  }
+
+  /// Replaces the free-motion desired ellipsoid by an arbitrary one (e.g. from a task planner).
+  /// Rejects (Fault::kInvalidParameter, old one kept) anything not symmetric positive definite.
+  Fault setFreeEllipsoid(const TaskMatrix& free_fme) noexcept {
+    if (!fme::isSymmetricPositiveDefinite(free_fme)) return Fault::kInvalidParameter;
+    free_fme_ = free_fme;
+    return Fault::kNone;
+  }
+
+  /// Back to the free-motion ellipsoid with nothing in progress.
+  void reset() noexcept {
+    transition_.reset(options_.mode == FmeEllipsoidMode::kStiff ? 0.0 : 1.0);
+    stiff_direction_ = options_.motion_direction;
+    fme::axisAlignedEllipsoid(stiff_direction_, major_, minor_, stiff_fme_);
+    status_ = Status{};
+  }
+
+  /// One servo tick at time t [s]: joint state (q, q_dot), requested end-effector force F.
+  /// Writes tau (always finite, |tau_i| <= T_i) and returns the fault (also in status()).
+  Fault tick(double t, const JointVector& q, const JointVector& qd, const TaskVector& F, JointVector& tau) noexcept {
+    tau.setZero();
+    status_.skipped_contact_work = false;
+    if (!std::isfinite(t) || !q.allFinite() || !qd.allFinite() || !F.allFinite())
+      return finish(Fault::kNonFiniteInput, tau, false);
+    model_.jacobian(q, J_);
+    if (!J_.allFinite()) return finish(Fault::kNonFiniteResult, tau, false);
+
+    // Primary task, scaled into the torque box keeping the force direction.
+    const bool contact = F.norm() > options_.contact_force_threshold;
+    if (!contact && options_.mode != FmeEllipsoidMode::kStiff && transition_.settledFree()) {
+      // Free motion, nothing near saturation: no observer, scaling, stiff ellipsoid or blend.
+      status_.skipped_contact_work = true;
+      status_.observer = 1.0;
+      status_.alpha = 1.0;
+      status_.force.setZero();
+      status_.tau_primary.setZero();
+      desired_ = free_fme_;
+    } else {
+      status_.tau_primary.noalias() = J_.transpose() * F;
+      status_.observer = saturationObserver(status_.tau_primary, limits_, options_.observer_shape);
+      status_.alpha = scaleIntoBox(status_.tau_primary, limits_);
+      status_.force = status_.alpha * F;
+      if (contact) {
+        stiff_direction_ = F;
+        fme::axisAlignedEllipsoid(stiff_direction_, major_, minor_, stiff_fme_);
+      }
+      updateDesired(t);
+    }
+    tau = status_.tau_primary;
+    status_.omega = transition_.omega();
+
+    // Secondary task in the null space. Failure here leaves the primary task alone.
+    if (!fme::fmeCostGradient(model_, q, J_, inv_limits_sq_, desired_, options_.gradient, status_.cost, grad_)) {
+      TaskMatrix unused;
+      const bool singular = !fme::weightedFme(J_, inv_limits_sq_, unused, options_.min_inverse_condition);
+      return finish(singular ? Fault::kSingular : Fault::kInvalidParameter, tau, true);
+    }
+    if (!conditioned()) return finish(Fault::kSingular, tau, true);
+    if (options_.dynamically_consistent) {
+      if constexpr (kHasMassMatrix<Model>) {
+        model_.massMatrix(q, mass_);
+        Eigen::LLT<Mat<N, N>> llt(mass_);
+        if (llt.info() != Eigen::Success) return finish(Fault::kInvalidParameter, tau, true);
+        mass_inv_ = llt.solve(Mat<N, N>::Identity());
+      } else {
+        mass_inv_.setIdentity();
+      }
+    } else {
+      mass_inv_.setIdentity();
+    }
+    if (!nullSpaceProjector(J_, mass_inv_, projector_)) return finish(Fault::kSingular, tau, true);
+    const JointVector tau_s = -options_.beta * grad_ - options_.damping * qd;
+    status_.tau_null_command.noalias() = projector_ * tau_s;
+    status_.tau_null = status_.tau_null_command;
+    // Keep the primary task intact: shrink tau_N until every joint is within its limit.
+    double gamma = 1.0;
+    for (int i = 0; i < N; ++i) {
+      const double total = tau(i) + status_.tau_null(i);
+      if (std::abs(total) > limits_(i) && status_.tau_null(i) != 0.0) {
+        const double room = (total > 0.0 ? limits_(i) : -limits_(i)) - tau(i);
+        gamma = std::min(gamma, std::max(0.0, room / status_.tau_null(i)));
+      }
+    }
+    status_.null_space_scale = gamma;
+    status_.tau_null *= gamma;
+    tau += status_.tau_null;
+    return finish(Fault::kNone, tau, true);
+  }
+
+  const Status& status() const noexcept { return status_; }
+  const Options& options() const noexcept { return options_; }
+  const TaskMatrix& desiredEllipsoid() const noexcept { return desired_; }
+  const TaskMatrix& freeEllipsoid() const noexcept { return free_fme_; }
+  const TaskMatrix& stiffEllipsoid() const noexcept { return stiff_fme_; }
+  /// K and zeta in use.
+  double majorAxis() const noexcept { return major_; }
+  double minorAxis() const noexcept { return minor_; }
+  const TaskMatrix& homeFme() const noexcept { return home_fme_; }
+  const JointVector& torqueLimits() const noexcept { return limits_; }
+  const JointVector& inverseSquaredLimits() const noexcept { return inv_limits_sq_; }
+
+ private:
+  void updateDesired(double t) noexcept {
+    double omega = 1.0;
+    switch (options_.mode) {
+      case FmeEllipsoidMode::kFree: omega = 1.0; break;
+      case FmeEllipsoidMode::kStiff: omega = 0.0; break;
+      case FmeEllipsoidMode::kAuto:
+        omega = transition_.update(t, status_.observer, (free_fme_ - stiff_fme_).norm(), options_.transition);
+        break;
+    }
+    if (options_.mode != FmeEllipsoidMode::kAuto) transition_.reset(omega);
+    desired_ = omega * free_fme_ + (1.0 - omega) * stiff_fme_;
+  }
+
+  bool conditioned() const noexcept {
+    const TaskMatrix A = fme::weightedVelocityEllipsoid(J_, inv_limits_sq_);
+    Eigen::SelfAdjointEigenSolver<TaskMatrix> eig(A, Eigen::EigenvaluesOnly);
+    return eig.eigenvalues()(0) > options_.min_inverse_condition * eig.eigenvalues()(M - 1);
+  }
+
+  // Last line of defence: finite and within limits whatever happened above.
+  Fault finish(Fault fault, JointVector& tau, bool keep_primary) noexcept {
+    if (!keep_primary) {
+      tau.setZero();
+      status_.tau_primary.setZero();
+      status_.force.setZero();
+    }
+    if (fault != Fault::kNone) {
+      status_.tau_null.setZero();
+      status_.tau_null_command.setZero();
+    }
+    if (zeroIfNonFinite(tau) != Fault::kNone && fault == Fault::kNone) fault = Fault::kNonFiniteResult;
+    clampSymmetric(tau, limits_);
+    status_.fault = fault;
+    return fault;
+  }
+
+  Model model_;
+  JointVector limits_, inv_limits_sq_;
+  TaskMatrix home_fme_ = TaskMatrix::Identity();
+  Options options_;
+  double major_ = 1.0, minor_ = 1.0;
+  TaskMatrix free_fme_ = TaskMatrix::Identity(), stiff_fme_ = TaskMatrix::Identity(),
+             desired_ = TaskMatrix::Identity();
+  TaskVector stiff_direction_ = TaskVector::Unit(M - 1);
+  EllipsoidTransition transition_;
+  Status status_;
+  // Workspace (preallocated: the tick touches no heap).
+  Mat<M, N> J_;
+  JointVector grad_ = JointVector::Zero();
+  Mat<N, N> mass_, mass_inv_, projector_;
+};
+
+}  // namespace uhaptics

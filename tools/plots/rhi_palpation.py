@@ -1,0 +1,60 @@
+#!/usr/bin/env python3
+"""Paper 003, Fig. 9 / Table I: palpation with the free vs the stiff ellipsoid (rendered force vs
+demanded force over the push), and the identification data (force balance fit).
+Usage: rhi_palpation.py out_dir out.png"""
+import csv
+import os
+import sys
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+
+
+def read(path):
+    with open(path) as f:
+        return list(csv.DictReader(f))
+
+
+def main(folder, out):
+    fig, axes = plt.subplots(1, 3, figsize=(15, 4.5))
+    table = {r["ellipsoid"]: r for r in read(os.path.join(folder, "palpation_table.csv"))}
+    for name, color in (("free", "tab:red"), ("stiff", "tab:purple")):
+        rows = read(os.path.join(folder, f"palpation_{name}.csv"))
+        t = [float(r["t"]) for r in rows]
+        t0 = t[0]
+        t = [x - t0 for x in t]
+        axes[0].plot(t, [float(r["demanded"]) for r in rows], "--", color=color, lw=0.8, label=f"{name}: desired K_e dX")
+        axes[0].plot(t, [abs(float(r["force_y"])) for r in rows], color=color, label=f"{name}: rendered")
+        for i in range(1, 5):
+            axes[1].plot(t, [float(r[f"tau{i}"]) for r in rows], color=color, lw=0.8, alpha=0.4 + 0.15 * i)
+    axes[0].set_xlabel("t [s]")
+    axes[0].set_ylabel("|F| along u [N]")
+    axes[0].set_title("palpation force")
+    axes[0].legend(fontsize=7)
+    axes[1].set_xlabel("t [s]")
+    axes[1].set_ylabel("joint torque [N m]")
+    axes[1].set_title("joint torques (red free, purple stiff)")
+    ident = read(os.path.join(folder, "identification.csv"))
+    for name, color in (("free", "tab:red"), ("stiff", "tab:purple")):
+        r = table[name]
+        m, phi, c = float(r["inertia_identified_kg"]), float(r["friction_identified_Ns_per_m"]), float(r["coulomb_identified_N"])
+        pts = [x for x in ident if x["ellipsoid"] == name]
+        meas = [float(x["push_force"]) for x in pts]
+        fit = [m * float(x["a_u"]) + phi * float(x["v_u"]) + c for x in pts]
+        axes[2].plot(meas, fit, ".", color=color, ms=3,
+                     label=f"{name}: M_x {m:.3f} kg (model {float(r['inertia_model_kg']):.3f}), F_max {float(r['peak_force_N']):.2f} N")
+    axes[2].plot([0.5, 1.5], [0.5, 1.5], "k:", lw=0.8)
+    axes[2].set_xlabel("applied force [N]")
+    axes[2].set_ylabel("M_x a + Phi v + F_c [N]")
+    axes[2].set_title("identification fit")
+    axes[2].legend(fontsize=7)
+    fig.tight_layout()
+    fig.savefig(out, dpi=110)
+
+
+if __name__ == "__main__":
+    if len(sys.argv) != 3:
+        sys.exit(__doc__)
+    main(*sys.argv[1:])

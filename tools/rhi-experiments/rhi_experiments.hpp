@@ -1,0 +1,138 @@
+#pragma once
+// Paper 003's studies on the simulated 4-DoF RHI and the 3-DoF example arm. Pure computation (no
+// files): tools/rhi-experiments/main.cpp writes the CSV/PNG, tests/rhi checks the numbers.
+#include <array>
+#include <string>
+#include <vector>
+
+#include "uhaptics/backends/simulated_planar_linkage.hpp"
+#include "uhaptics/models/planar_linkage_model.hpp"
+#include "uhaptics/renderers/fme_null_space_controller.hpp"
+
+namespace uhaptics::rhi {
+
+using Vec4 = Vec<4>;
+
+using Rhi4Controller = FmeNullSpaceController<Rhi4Model>;
+using Planar3Controller = FmeNullSpaceController<Planar3Model>;
+
+Rhi4Model loadRhi4(const std::string& params_dir);
+Planar3Model loadPlanar3(const std::string& params_dir);
+
+/// Damped-least-squares inverse kinematics from q_start; throws uhaptics::Error when x is not reached.
+template <int N>
+Vec<N> inverseKinematics(const PlanarLinkageModel<N>& model, const Vec<N>& q_start, const Vec2& x);
+
+// ---- 3-DoF example (Fig. 3-4) ------------------------------------------------------------------
+struct ExampleConfiguration {
+  std::string name;  // "initial", "free", "stiff"
+  Vec3 q;
+  Mat2 fme;          // M_hat at q
+  double nu = 0.0;   // cost against the ellipsoid it was optimized for (initial: against M_free)
+  double peak_force = 0.0;  // largest |alpha F_e| over the run [N]
+  double min_alpha = 1.0;
+};
+struct ExampleSample {
+  double t;
+  std::array<Vec3, 3> tau;    // per configuration, after scaling
+  std::array<double, 3> force_x;  // output force along x per configuration
+  double demanded_x;
+};
+struct ExampleResult {
+  double K = 0.0, zeta = 0.0;  // from q0
+  Mat2 free_fme, stiff_fme;
+  Vec2 x_end;  // end-effector position held fixed
+  std::array<ExampleConfiguration, 3> configs;
+  std::vector<ExampleSample> samples;
+};
+/// F_e = [3.5 sin(pi t / 2), 0] N over `duration` s at the three configurations.
+ExampleResult runExample3(const Planar3Model& model, double duration = 4.0, double dt = 1e-3);
+
+// ---- closed loop: controller + simulated RHI + virtual wall + hand --------------------------------
+struct PalpationSetup {
+  Vec2 x0 = Vec2(0.5, 0.1);  // start point and wall position [m]
+  Vec2 u = Vec2(0.0, 1.0);   // palpation direction
+  double wall_stiffness = 1000.0;  // K_e [N/m]
+  double servo_dt = 1e-3;
+  double substep = 1e-4;
+  double hand_stiffness = 800.0;  // user's grip [N/m]
+  double hand_damping = 8.0;      // [N s/m]
+  double settle_time = 3.0;       // null-space reconfiguration at x0 before anything else [s]
+};
+
+struct LoopSample {
+  double t;
+  Vec2 x;
+  Vec2 force;       // commanded (alpha F)
+  double demanded;  // |F| asked by the wall
+  Vec4 tau, tau_null, tau_null_command;
+  double observer, omega, nu, alpha;
+};
+
+class ClosedLoop {
+ public:
+  ClosedLoop(const Rhi4Model& model, const Rhi4Controller::Options& options, const PalpationSetup& setup);
+  /// Hand anchored at `anchor` (isotropic spring-damper), wall on or off, one servo period.
+  void tick(const Vec2& anchor, bool wall_on);
+  /// Same with an arbitrary end-effector load (identification pushes).
+  void tick(const EndEffectorLoad& load, bool wall_on);
+  LoopSample sample() const;
+  SimulatedPlanarLinkage<4>& device() noexcept { return sim_; }
+  Rhi4Controller& controller() noexcept { return ctrl_; }
+  double time() const noexcept { return t_; }
+  EndEffectorLoad handAt(const Vec2& anchor) const;
+
+ private:
+  PalpationSetup setup_;
+  SimulatedPlanarLinkage<4> sim_;
+  Rhi4Controller ctrl_;
+  double t_ = 0.0;
+  Vec2 force_ = Vec2::Zero();
+  Vec4 tau_ = Vec4::Zero();
+};
+
+// ---- Table I: palpation with the free vs the stiff ellipsoid -------------------------------------
+struct IdentificationTrial {
+  double push_force;  // constant external force along u [N]
+  std::vector<std::array<double, 4>> samples;  // x_u, v_u, a_u, F_ext along u, inside the window
+};
+struct PalpationCase {
+  std::string name;  // "free", "stiff"
+  Vec4 q_settled;    // configuration after the reconfiguration at x0
+  double capability = 0.0;  // static maximum force along u at q_settled [N]
+  double peak_force = 0.0;  // largest rendered force along u during the push [N]
+  double inertia_model = 0.0;  // u^T Lambda u at the identification point (guided along u) [kg]
+  double friction_model = 0.0; // u^T J#^T B J# u, joint viscous friction reflected along u [N s/m]
+  double inertia_identified = 0.0;  // least squares [kg]
+  double friction_identified = 0.0; // viscous Phi [N s/m]
+  double coulomb_identified = 0.0;  // constant (Coulomb) part of the back-drive force [N]
+  double fit_rms = 0.0;             // residual of the fit [N]
+  std::vector<LoopSample> push;     // the palpation run
+  std::vector<IdentificationTrial> trials;
+};
+PalpationCase runPalpation(const Rhi4Model& model, FmeEllipsoidMode mode, const PalpationSetup& setup = {},
+                           int trials = 10);
+
+// ---- Fig. 10: workspace map of the force-capability ratio ---------------------------------------
+struct WorkspacePoint {
+  Vec2 x;
+  double free_force, stiff_force, ratio;  // NaN when unreachable
+};
+/// Grid of spacing `step` over the disc of radius `max_radius` around the base; both ellipsoids are
+/// matched by offline self-motion descent from the inverse kinematics solution nearest home.
+std::vector<WorkspacePoint> workspaceRatioMap(const Rhi4Model& model, double step, double max_radius,
+                                              const Vec2& u = Vec2(0.0, 1.0), unsigned threads = 0);
+
+// ---- Fig. 11: transition with and without smoothing --------------------------------------------
+struct TransitionRun {
+  bool smooth;
+  std::vector<LoopSample> samples;
+  // Largest change between consecutive ticks, |.(k) - .(k-1)|_inf [N m], and when it happened:
+  double max_null_torque_jump = 0.0;  // of the null-space command (I - J^T J#^T) tau_S
+  double jump_time = 0.0;
+  double max_applied_null_jump = 0.0;  // of the applied null-space torque (after the limit scaling)
+  double transition_duration = 0.0;   // rho |M_free - M_stiff|_F [s]
+};
+TransitionRun runTransition(const Rhi4Model& model, bool smooth, const PalpationSetup& setup = {});
+
+}  // namespace uhaptics::rhi
