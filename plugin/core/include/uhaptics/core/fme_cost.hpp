@@ -47,14 +47,17 @@ bool fmeCostValue(const Model& model, const Vec<Model::kJoints>& q, const Vec<Mo
   return logDetDivergence(Mhat, Mdes, nu);
 }
 
-/// nu and d nu/dq at q, given J = jacobian(q) (the caller usually has it already).
+/// nu and d nu/dq at q, given J = jacobian(q) (the caller usually has it already). False when
+/// J W W J^T is singular to within min_inverse_condition (see weightedFme) or nu is undefined.
 template <class Model>
 bool fmeCostGradient(const Model& model, const Vec<Model::kJoints>& q, const Mat<Model::kTask, Model::kJoints>& J,
                      const Vec<Model::kJoints>& inv_limits_sq, const Mat<Model::kTask, Model::kTask>& Mdes,
-                     GradientMethod method, double& nu, Vec<Model::kJoints>& grad) noexcept {
+                     GradientMethod method, double& nu, Vec<Model::kJoints>& grad,
+                     double min_inverse_condition = 1e-8) noexcept {
   constexpr int N = Model::kJoints, M = Model::kTask;
   Mat<M, M> Mhat, G;
-  if (!weightedFme(J, inv_limits_sq, Mhat) || !logDetDivergence(Mhat, Mdes, nu, &G)) return false;
+  if (!weightedFme(J, inv_limits_sq, Mhat, min_inverse_condition) || !logDetDivergence(Mhat, Mdes, nu, &G))
+    return false;
   if (method == GradientMethod::kAnalytic) {
     std::array<Mat<M, N>, N> dJ;
     jacobianDerivatives(model, q, dJ);
