@@ -1,0 +1,56 @@
+#pragma once
+// What a controller board sees of its device: joint sensors to sample, actuators to drive, time.
+// The board emulator runs its firmware logic on top of a BoardPlant; a simulated device backend
+// (devices/backends) becomes a BoardPlant through a small adapter, and LinearTestPlant below is a
+// self-contained plant for the protocol and servo-loop tests.
+//
+// All methods are called from one thread (the emulator's), never allocate and never throw.
+#include <array>
+
+#include "uhaptics/core/wire_protocol.hpp"
+
+namespace uhaptics {
+
+class BoardPlant {
+ public:
+  virtual ~BoardPlant() = default;
+  virtual int jointCount() const noexcept = 0;
+  virtual int actuatorCount() const noexcept = 0;
+  /// Current sensor values (rad or m), jointCount() entries.
+  virtual void readJoints(double* positions) noexcept = 0;
+  /// Actuator efforts (N m or N), actuatorCount() entries, held until the next call.
+  virtual void applyCommand(const double* efforts) noexcept = 0;
+  /// Integrates the plant over dt seconds with the held command.
+  virtual void advance(double dt) noexcept = 0;
+};
+
+/// Decoupled mass-spring-dampers, one per actuator (m q'' + b q' + k q = u); sensed-only joints
+/// beyond the actuated ones follow a fixed fraction of actuator 0 (a passive linkage, as the finger
+/// exoskeleton's q_B does). Semi-implicit Euler with 0.1 ms substeps: stable for the defaults.
+class LinearTestPlant final : public BoardPlant {
+ public:
+  struct Params {
+    int joints = 2;
+    int actuators = 1;
+    double mass = 0.05;        // kg or kg m^2
+    double damping = 0.5;      // N s/m
+    double stiffness = 50.0;   // N/m: a soft centring spring, so commanded efforts give bounded motion
+    double passive_ratio = 0.5;
+  };
+  explicit LinearTestPlant(const Params& p) noexcept;
+
+  int jointCount() const noexcept override { return params_.joints; }
+  int actuatorCount() const noexcept override { return params_.actuators; }
+  void readJoints(double* positions) noexcept override;
+  void applyCommand(const double* efforts) noexcept override;
+  void advance(double dt) noexcept override;
+
+  /// Last effort applied to actuator i (what the test inspects: "zero torque within N periods").
+  double appliedEffort(int i) const noexcept { return effort_[i]; }
+
+ private:
+  Params params_;
+  std::array<double, wire::kMaxChannels> q_{}, qd_{}, effort_{};
+};
+
+}  // namespace uhaptics

@@ -1,0 +1,114 @@
+// The libusb transport without hardware: the real libusb runs discovery in this environment and
+// must say clearly that the device is absent; the advice for the other opening errors is checked
+// as text; descriptors load from a parameter file's "usb" section.
+#include <catch2/catch.hpp>
+
+#include <libusb.h>
+
+#include <fstream>
+#include <sstream>
+
+#include "uhaptics/backends/libusb_transport.hpp"
+#include "uhaptics/core/fault.hpp"
+#include "uhaptics/models/param_file.hpp"
+
+using namespace uhaptics;
+
+namespace {
+
+DeviceDescriptor tauDescriptor() {
+  DeviceDescriptor d;
+  d.name = "TAU";
+  d.type = wire::DeviceType::kTau;
+  d.vendor_id = 0x1209;
+  d.product_id = 0x0002;
+  d.joints = 6;
+  d.actuators = 6;
+  d.effort_limit.fill(2.0);
+  return d;
+}
+
+std::string readFile(const std::string& path) {
+  std::ifstream in(path);
+  std::stringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+const std::string kUdevRule = UHAPTICS_UDEV_RULE;
+
+}  // namespace
+
+TEST_CASE("no device: the real libusb path says so and lists what it found", "[usb][libusb]") {
+  // No uhaptics board is attached to a CI machine (and its USB bus may not be visible at all).
+  try {
+    LibusbTransport transport(tauDescriptor());
+    FAIL("a TAU board (1209:0002) is attached: this test expects none");
+  } catch (const Error& e) {
+    const std::string m = e.what();
+    INFO(m);
+    const bool absent = m.find("no USB device 1209:0002 (TAU) found. USB devices present:") != std::string::npos;
+    const bool no_bus = m.find("libusb_init failed") != std::string::npos;
+    CHECK((absent || no_bus));
+    if (absent) {
+      CHECK(m.find("usb/vendor_id and usb/product_id") != std::string::npos);
+      // Either the list of devices present or the hint that the bus is not visible.
+      const auto found = LibusbTransport::listDevices();
+      if (found.empty()) CHECK(m.find("/dev/bus/usb") != std::string::npos);
+      for (const auto& line : found) CHECK(m.find(line) != std::string::npos);
+    }
+  }
+}
+
+TEST_CASE("opening errors come with what to do", "[usb][libusb]") {
+  const DeviceDescriptor d = tauDescriptor();
+  const std::string access = libusbOpenAdvice(LIBUSB_ERROR_ACCESS, d);
+  CHECK(access.find("permission denied") != std::string::npos);
+  CHECK(access.find("devices/udev/99-uhaptics.rules") != std::string::npos);
+  CHECK(access.find("udevadm") != std::string::npos);
+  const std::string busy = libusbOpenAdvice(LIBUSB_ERROR_BUSY, d);
+  CHECK(busy.find("interface 0 of TAU (USB 1209:0002) is busy") != std::string::npos);
+  CHECK(libusbOpenAdvice(LIBUSB_ERROR_NOT_FOUND, d).find("usb/interface") != std::string::npos);
+  CHECK(libusbOpenAdvice(LIBUSB_ERROR_IO, d).find("Input/Output") != std::string::npos);
+}
+
+TEST_CASE("the shipped udev rule covers every device's vendor/product id", "[usb][udev]") {
+  const std::string rules = readFile(kUdevRule);
+  REQUIRE_FALSE(rules.empty());
+  for (const char* pid : {"0001", "0002", "0003"}) {
+    const std::string line = std::string("ATTRS{idVendor}==\"1209\", ATTRS{idProduct}==\"") + pid + "\"";
+    CHECK(rules.find(line) != std::string::npos);
+  }
+  CHECK(rules.find("GROUP=\"plugdev\"") != std::string::npos);
+}
+
+TEST_CASE("descriptor from a parameter file's usb section", "[usb][params]") {
+  const char* text = R"({"device": "tau", "format_version": 1,
+    "usb": {"vendor_id": {"value": 4617, "source": "assumed: pid.codes 0x1209"},
+            "product_id": 2, "interface": 0, "endpoint_in": 129, "endpoint_out": 1,
+            "protocol_version": 1}})";
+  const ParamFile file = ParamFile::parse(text, "tau.json");
+  const double limits[6] = {2, 2, 2, 2, 2, 2};
+  const DeviceDescriptor d = DeviceDescriptor::fromParams(file, wire::DeviceType::kTau, "TAU", 6, 6, limits);
+  CHECK(d.vendor_id == 0x1209);
+  CHECK(d.product_id == 0x0002);
+  CHECK(d.endpoint_in == 0x81);
+  CHECK(d.effort_limit[5] == 2.0);
+
+  const char* future = R"({"usb": {"vendor_id": 4617, "product_id": 2, "interface": 0, "endpoint_in": 129,
+                                    "endpoint_out": 1, "protocol_version": 7}})";
+  CHECK_THROWS_WITH(DeviceDescriptor::fromParams(ParamFile::parse(future, "f.json"), wire::DeviceType::kTau,
+                                                 "TAU", 6, 6, limits),
+                    Catch::Contains("f.json") && Catch::Contains("protocol_version 7 is not spoken"));
+  const char* bad_endpoint = R"({"usb": {"vendor_id": 4617, "product_id": 2, "interface": 0, "endpoint_in": 1,
+                                          "endpoint_out": 1, "protocol_version": 1}})";
+  CHECK_THROWS_WITH(DeviceDescriptor::fromParams(ParamFile::parse(bad_endpoint, "e.json"), wire::DeviceType::kTau,
+                                                 "TAU", 6, 6, limits),
+                    Catch::Contains("usb/endpoint_in"));
+  const double bad_limits[6] = {2, 2, 2, 2, 2, -1};
+  const char* ok = R"({"usb": {"vendor_id": 4617, "product_id": 2, "interface": 0, "endpoint_in": 129,
+                                "endpoint_out": 1, "protocol_version": 1}})";
+  CHECK_THROWS_WITH(DeviceDescriptor::fromParams(ParamFile::parse(ok, "l.json"), wire::DeviceType::kTau, "TAU",
+                                                 6, 6, bad_limits),
+                    Catch::Contains("effort limit of actuator 5"));
+}
