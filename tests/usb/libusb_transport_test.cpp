@@ -5,9 +5,11 @@
 
 #include <libusb.h>
 
+#include <cstdio>
 #include <fstream>
 #include <sstream>
 
+#include "uhaptics/backends/board_catalog.hpp"
 #include "uhaptics/backends/libusb_transport.hpp"
 #include "uhaptics/core/fault.hpp"
 #include "uhaptics/models/param_file.hpp"
@@ -75,8 +77,12 @@ TEST_CASE("opening errors come with what to do", "[usb][libusb]") {
 TEST_CASE("the shipped udev rule covers every device's vendor/product id", "[usb][udev]") {
   const std::string rules = readFile(kUdevRule);
   REQUIRE_FALSE(rules.empty());
-  for (const char* pid : {"0001", "0002", "0003"}) {
-    const std::string line = std::string("ATTRS{idVendor}==\"1209\", ATTRS{idProduct}==\"") + pid + "\"";
+  for (const auto type : {wire::DeviceType::kExoFinger, wire::DeviceType::kTau, wire::DeviceType::kRhiPlanar}) {
+    const DeviceDescriptor d = boardDefaults(type).descriptor;
+    char line[96];
+    std::snprintf(line, sizeof line, "ATTRS{idVendor}==\"%04x\", ATTRS{idProduct}==\"%04x\"", d.vendor_id,
+                  d.product_id);
+    INFO(d.name);
     CHECK(rules.find(line) != std::string::npos);
   }
   CHECK(rules.find("GROUP=\"plugdev\"") != std::string::npos);

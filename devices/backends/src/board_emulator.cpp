@@ -57,33 +57,34 @@ void BoardEmulator::advanceLocked(Clock::time_point now) noexcept {
   }
 }
 
-void BoardEmulator::pushLocked(const std::uint8_t* bytes, std::size_t size, Clock::time_point release) noexcept {
+void BoardEmulator::pushLocked(const std::uint8_t* bytes, std::size_t size, std::uint64_t release_after) noexcept {
   if (queue_size_ == kQueue) return;  // a full endpoint FIFO drops, as hardware does
   Outgoing& slot = queue_[(queue_head_ + queue_size_) % kQueue];
   std::copy(bytes, bytes + size, slot.bytes.begin());
   slot.size = size;
-  slot.release = release;
+  slot.release_after = release_after;
   ++queue_size_;
 }
 
-void BoardEmulator::emitLocked(wire::Frame& out, Clock::time_point now) noexcept {
+void BoardEmulator::emitLocked(wire::Frame& out, Clock::time_point /*now*/) noexcept {
   out.version = version_;
   out.device = config_.device;
   out.sequence = tx_sequence_++;
   std::array<std::uint8_t, wire::kMaxFrameSize> bytes{};
   const std::size_t size = wire::encode(out, bytes.data(), bytes.size());
   if (size == 0) return;
+  std::uint64_t release_after = rx_frames_;
   if (fault_frames_ > 0) {
     --fault_frames_;
     switch (fault_) {
       case Fault::kDrop: return;
       case Fault::kCorrupt: bytes[size / 2] ^= 0x10; break;  // one flipped bit: the CRC must catch it
-      case Fault::kDuplicate: pushLocked(bytes.data(), size, now); break;
-      case Fault::kDelay: now += std::chrono::microseconds(fault_delay_us_); break;
+      case Fault::kDuplicate: pushLocked(bytes.data(), size, release_after); break;
+      case Fault::kDelay: release_after += static_cast<std::uint64_t>(fault_delay_periods_); break;
     }
   }
   // FIFO order is kept: a delayed frame holds back the ones behind it (one bulk pipe).
-  pushLocked(bytes.data(), size, now);
+  pushLocked(bytes.data(), size, release_after);
 }
 
 void BoardEmulator::handleLocked(const wire::Frame& in, Clock::time_point now) noexcept {
@@ -176,6 +177,7 @@ TransportStatus BoardEmulator::send(const std::uint8_t* data, std::size_t size, 
   if (!plugged_) return TransportStatus::kDisconnected;
   const auto now = Clock::now();
   advanceLocked(now);
+  ++rx_frames_;
   wire::Frame in;
   const wire::Reject r = wire::decode(data, size, in, &rx_stats_);
   if (r != wire::Reject::kNone) {
@@ -197,7 +199,6 @@ TransportStatus BoardEmulator::receive(std::uint8_t* buffer, std::size_t capacit
   received = 0;
   const auto deadline = Clock::now() + std::chrono::microseconds(std::max(timeout_us, 0));
   for (;;) {
-    Clock::time_point wake = deadline;
     {
       const std::lock_guard<std::mutex> lock(mutex_);
       if (!plugged_) return TransportStatus::kDisconnected;
@@ -205,7 +206,7 @@ TransportStatus BoardEmulator::receive(std::uint8_t* buffer, std::size_t capacit
       advanceLocked(now);
       if (queue_size_ > 0) {
         const Outgoing& head = queue_[queue_head_];
-        if (head.release <= now) {
+        if (head.release_after <= rx_frames_) {
           if (head.size > capacity) return TransportStatus::kError;  // LIBUSB_ERROR_OVERFLOW analogue
           std::copy(head.bytes.begin(), head.bytes.begin() + static_cast<std::ptrdiff_t>(head.size), buffer);
           received = head.size;
@@ -213,11 +214,11 @@ TransportStatus BoardEmulator::receive(std::uint8_t* buffer, std::size_t capacit
           --queue_size_;
           return TransportStatus::kOk;
         }
-        wake = std::min(wake, head.release);
       }
       if (now >= deadline) return TransportStatus::kTimeout;
     }
-    std::this_thread::sleep_until(wake);
+    // Nothing deliverable: a real pipe would block until the timeout (or an unplug).
+    std::this_thread::sleep_until(std::min(deadline, Clock::now() + std::chrono::microseconds(200)));
   }
 }
 
@@ -226,11 +227,11 @@ bool BoardEmulator::reconnect() noexcept {
   return plugged_;
 }
 
-void BoardEmulator::inject(Fault fault, int frames, int delay_us) noexcept {
+void BoardEmulator::inject(Fault fault, int frames, int delay_periods) noexcept {
   const std::lock_guard<std::mutex> lock(mutex_);
   fault_ = fault;
   fault_frames_ = std::max(frames, 0);
-  fault_delay_us_ = std::max(delay_us, 0);
+  fault_delay_periods_ = std::max(delay_periods, 0);
 }
 
 void BoardEmulator::resetBoard() noexcept {

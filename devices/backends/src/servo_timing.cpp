@@ -70,6 +70,13 @@ TimingReport TimingStats::report() const {
   return r;
 }
 
+void TimingStats::histograms(std::uint32_t* period, std::uint32_t* latency) const noexcept {
+  for (int b = 0; b < kBins; ++b) {
+    period[b] = period_->bins[b].load(std::memory_order_relaxed);
+    latency[b] = latency_->bins[b].load(std::memory_order_relaxed);
+  }
+}
+
 std::string TimingReport::format() const {
   char text[512];
   std::snprintf(text, sizeof text,

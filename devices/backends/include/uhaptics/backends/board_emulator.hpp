@@ -48,8 +48,11 @@ class BoardEmulator final : public Transport {
   const char* describe() const noexcept override { return "in-process board emulator"; }
 
   // Fault injection (any thread).
-  /// Applies fault to the next `frames` frames the board sends; kDelay holds each for delay_us.
-  void inject(Fault fault, int frames, int delay_us = 0) noexcept;
+  /// Applies fault to the next `frames` frames the board sends. kDelay holds each of them until the
+  /// board has received `delay_periods` more host frames (one per servo period), and with it every
+  /// frame queued behind (one bulk pipe keeps its order): a delay counted in periods, so tests do
+  /// not depend on the test machine's scheduling.
+  void inject(Fault fault, int frames, int delay_periods = 0) noexcept;
   /// Board reboots: configuration, watchdog and sequence numbers are lost, outputs go to zero.
   void resetBoard() noexcept;
   /// Cable pulled: every transfer fails with kDisconnected and the board (unpowered) stops driving.
@@ -75,7 +78,7 @@ class BoardEmulator final : public Transport {
   struct Outgoing {
     std::array<std::uint8_t, wire::kMaxFrameSize> bytes{};
     std::size_t size = 0;
-    Clock::time_point release{};
+    std::uint64_t release_after = 0;  // deliverable once rx_frames_ reaches this
   };
   static constexpr std::size_t kQueue = 32;
 
@@ -84,7 +87,7 @@ class BoardEmulator final : public Transport {
   void zeroOutputsLocked() noexcept;
   void handleLocked(const wire::Frame& in, Clock::time_point now) noexcept;
   void emitLocked(wire::Frame& out, Clock::time_point now) noexcept;
-  void pushLocked(const std::uint8_t* bytes, std::size_t size, Clock::time_point release) noexcept;
+  void pushLocked(const std::uint8_t* bytes, std::size_t size, std::uint64_t release_after) noexcept;
   std::uint32_t boardMicros(Clock::time_point t) const noexcept;
 
   const Config config_;
@@ -108,7 +111,8 @@ class BoardEmulator final : public Transport {
   std::size_t queue_head_ = 0, queue_size_ = 0;
   Fault fault_ = Fault::kDrop;
   int fault_frames_ = 0;
-  int fault_delay_us_ = 0;
+  int fault_delay_periods_ = 0;
+  std::uint64_t rx_frames_ = 0;  // host frames received
 };
 
 }  // namespace uhaptics

@@ -141,6 +141,7 @@ class ServoLoop {
   // Any thread.
   ServoCounters counters() const noexcept;
   TimingReport timing() const { return timing_.report(); }
+  const TimingStats& timingStats() const noexcept { return timing_; }
   std::string realtimeNote() const;
   /// Counters, timing and real-time note as text (what stop() leaves for the log).
   std::string summary() const;

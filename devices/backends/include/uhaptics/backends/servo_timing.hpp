@@ -34,6 +34,8 @@ class TimingStats {
   void record(std::int64_t period_ns, std::int64_t latency_ns, std::uint64_t missed) noexcept;
   void reset() noexcept;
   TimingReport report() const;
+  /// Copies the two histograms (kBins counts each, bin b = [b, b+1) us) for figures.
+  void histograms(std::uint32_t* period, std::uint32_t* latency) const noexcept;
 
  private:
   struct Histogram {
