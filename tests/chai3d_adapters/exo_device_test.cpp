@@ -3,6 +3,7 @@
 #include <cmath>
 
 #include "chai3d.h"
+#include "tool_scene.hpp"
 #include "uhaptics/chai3d/CExoFingerDevice.hpp"
 #include "uhaptics/core/passivity_observer.hpp"
 #include "uhaptics/tools/alloc_probe.hpp"
@@ -19,32 +20,10 @@ uhaptics::DeviceSelection exoSelection(bool lag) {
   return s;
 }
 
-struct Scene {
-  cWorld world;
-  cToolCursor* tool = nullptr;
-  cMesh* floor = nullptr;
-  // A stiff block under the workspace centre: the fingertip dips into it during flexion.
-  Scene(const cGenericHapticDevicePtr& device, bool with_block) {
-    const double r = device->getSpecifications().m_workspaceRadius;
-    if (with_block) {
-      floor = new cMesh();
-      world.addChild(floor);
-      cCreateBox(floor, 4 * r, 4 * r, 2 * r);
-      floor->setLocalPos(0.0, 0.0, -1.2 * r);  // top face at z = -0.2 r
-      floor->createAABBCollisionDetector(0.01);
-      floor->m_material->setStiffness(device->getSpecifications().m_maxLinearStiffness);
-    }
-    tool = new cToolCursor(&world);
-    world.addChild(tool);
-    tool->setHapticDevice(device);
-    tool->setRadius(0.002);
-    tool->setWorkspaceRadius(r);  // world = device coordinates
-  }
-  void tick() {
-    world.computeGlobalPositions(true);
-    tool->updateFromDevice();
-    tool->computeInteractionForces();
-    tool->applyToDevice();
+// With a block: a stiff floor under the workspace centre; the fingertip dips into it during flexion.
+struct Scene : ToolScene {
+  Scene(const cGenericHapticDevicePtr& device, bool with_block) : ToolScene(device, 0.002) {
+    if (with_block) addBlock(0.2, device->getSpecifications().m_maxLinearStiffness);
   }
 };
 

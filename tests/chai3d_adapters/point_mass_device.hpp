@@ -18,20 +18,11 @@ class PointMassDevice : public chai3d::cUhapticsDevice {
 
   explicit PointMassDevice(const uhaptics::DeviceSelection& selection)
       : cUhapticsDevice(0, selection, 1e-3) {
-    setCommonSpecifications("point mass (test fixture)");
+    setCommonSpecifications("point mass (test fixture)", false);
     m_specifications.m_maxLinearForce = kMaxForce;
-    m_specifications.m_maxAngularTorque = 0.0;
     m_specifications.m_maxLinearStiffness = 2000.0;
-    m_specifications.m_maxAngularStiffness = 0.0;
     m_specifications.m_maxLinearDamping = 10.0;
-    m_specifications.m_maxAngularDamping = 0.0;
     m_specifications.m_workspaceRadius = 0.1;
-    m_specifications.m_sensedPosition = true;
-    m_specifications.m_sensedRotation = false;
-    m_specifications.m_actuatedPosition = true;
-    m_specifications.m_actuatedRotation = false;
-    m_specifications.m_rightHand = true;
-    m_specifications.m_leftHand = true;
   }
   ~PointMassDevice() override { close(); }
 
@@ -44,26 +35,25 @@ class PointMassDevice : public chai3d::cUhapticsDevice {
   void startBackend() override {
     position_.setZero();
     velocity_.setZero();
+    publish();
   }
   void stopBackend() noexcept override { last_actuator_.setZero(); }
-  uhaptics::Fault servoTick(const uhaptics::Vec3& force, const uhaptics::Vec3&, const uhaptics::Vec3& hand,
-                            double dt, double& output) noexcept override {
-    last_actuator_ = force;
+  uhaptics::Fault servoTick(const ServoInput& input, double& output) noexcept override {
+    const double dt = input.dt;
+    last_actuator_ = input.force;
     uhaptics::scaleIntoBox(last_actuator_, uhaptics::Vec3::Constant(kMaxForce));
     output = last_actuator_.cwiseAbs().maxCoeff();
-    const uhaptics::Vec3 acceleration = (last_actuator_ + hand - kFriction * velocity_) / kMass;
+    const uhaptics::Vec3 acceleration = (last_actuator_ + input.handForce - kFriction * velocity_) / kMass;
     velocity_ += dt * acceleration;  // semi-implicit Euler: stable for this stiffness and step
     position_ += dt * velocity_;
+    publish();
     return uhaptics::Fault::kNone;
   }
-  void readState(uhaptics::Vec3& p, uhaptics::Mat3& r, uhaptics::Vec3& v, uhaptics::Vec3& w) noexcept override {
-    p = position_;
-    r.setIdentity();
-    v = velocity_;
-    w.setZero();
-  }
-  int readJointAngles(double q[chai3d::C_MAX_DOF]) noexcept override {
-    for (int i = 0; i < 3; ++i) q[i] = position_(i);
-    return 3;
+
+ private:
+  void publish() noexcept {
+    m_state.position = position_;
+    m_state.linearVelocity = velocity_;
+    m_state.joints = position_;  // three prismatic "joints"
   }
 };

@@ -3,6 +3,7 @@
 #include <cmath>
 
 #include "chai3d.h"
+#include "tool_scene.hpp"
 #include "uhaptics/chai3d/CTauDevice.hpp"
 #include "uhaptics/tools/alloc_probe.hpp"
 
@@ -38,26 +39,14 @@ Result pushIntoBlock(cTauDevice::cWallMode mode, double stiffness) {
   auto device = cTauDevice::create(tauSelection(mode));
   device->setLockStep(true);
   const double r = device->getSpecifications().m_workspaceRadius;
-  cWorld world;
-  cMesh* block = new cMesh();
-  world.addChild(block);
-  cCreateBox(block, 4 * r, 4 * r, 2 * r);
-  block->setLocalPos(0.0, 0.0, -1.2 * r);
-  block->createAABBCollisionDetector(0.01);
-  block->m_material->setStiffness(stiffness);
-  cToolCursor* tool = new cToolCursor(&world);
-  world.addChild(tool);
-  tool->setHapticDevice(device);
-  tool->setRadius(kToolRadius);
-  tool->setWorkspaceRadius(r);
+  ToolScene scene(device, kToolRadius);
+  scene.addBlock(0.2, stiffness);
+  cToolCursor* tool = scene.tool;
   REQUIRE(tool->start());
   const double surface = -0.2 * r + kToolRadius;
   Result result;
   for (int i = 0; i < 4000; ++i) {
-    world.computeGlobalPositions(true);
-    tool->updateFromDevice();
-    tool->computeInteractionForces();
-    tool->applyToDevice();
+    scene.tick();
     result.max_penetration = std::max(result.max_penetration, surface - tool->getDeviceGlobalPos().z());
     result.lqr_engaged = result.lqr_engaged || device->isLqrWallEngaged();
     REQUIRE(device->getLastFault() == uhaptics::Fault::kNone);

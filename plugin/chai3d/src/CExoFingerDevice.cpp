@@ -48,22 +48,13 @@ cExoFingerDevice::cExoFingerDevice(unsigned int a_deviceNumber, const uhaptics::
   m_centre = 0.5 * (lo + hi);
   const double radius = 0.5 * (hi - lo).minCoeff();
 
-  setCommonSpecifications("finger exoskeleton module");
-  const double force_limit = model.forceLimit()(0);
+  setCommonSpecifications("finger exoskeleton module", false);
   // Virtual work: F_tip |d tip| = F_act |d l_x|, on average over the working range.
-  m_specifications.m_maxLinearForce = force_limit / tip_per_length;
-  m_specifications.m_maxAngularTorque = 0.0;
+  m_specifications.m_maxLinearForce = model.forceLimit()(0) / tip_per_length;
   // What an application may ask of the proxy: the coupling stiffness seen at the fingertip.
   m_specifications.m_maxLinearStiffness = m_couplingStiffness / tip_lever_sq;
-  m_specifications.m_maxAngularStiffness = 0.0;
   m_specifications.m_maxLinearDamping = 0.0;  // a position-driven finger: nothing to damp
-  m_specifications.m_maxAngularDamping = 0.0;
   m_specifications.m_workspaceRadius = radius;
-  m_specifications.m_sensedPosition = true;
-  m_specifications.m_sensedRotation = false;
-  m_specifications.m_actuatedPosition = true;
-  m_specifications.m_actuatedRotation = false;
-  m_specifications.m_rightHand = true;
   m_specifications.m_leftHand = false;
 
   uhaptics::UnderactuatedGains<Model> gains;
@@ -81,9 +72,12 @@ uhaptics::Vec2 cExoFingerDevice::fingertip(const Model::TaskVector& a_x) const n
   return points.fingertip;
 }
 
-uhaptics::Vec3 cExoFingerDevice::toDevice(const uhaptics::Vec2& a_handPoint) const noexcept {
-  const uhaptics::Vec2 p = a_handPoint - m_centre;
-  return uhaptics::Vec3(0.0, p.x(), -p.y());  // distal -> +y, palmar -> -z
+void cExoFingerDevice::updateState(double a_dt) noexcept {
+  // Hand frame (x distal) -> device y-z plane, see the class comment.
+  const uhaptics::Vec3 position = planarToDevice(m_data.points.fingertip - m_centre);
+  m_state.linearVelocity = a_dt > 0.0 ? ((position - m_state.position) / a_dt).eval() : uhaptics::Vec3::Zero();
+  m_state.position = position;
+  m_state.joints = m_data.q;  // l_x [m], q_B [rad]
 }
 
 void cExoFingerDevice::startBackend() {
@@ -104,8 +98,7 @@ void cExoFingerDevice::startBackend() {
   m_sim = std::make_unique<uhaptics::ExoFingerSim>(model, std::move(trajectory), options);
   m_renderer->reset();
   uhaptics::update(model, m_sim->state().q, m_data);
-  m_position = toDevice(m_data.points.fingertip);
-  m_velocity.setZero();
+  updateState(0.0);
   m_actuator.setZero();
 }
 
@@ -114,12 +107,12 @@ void cExoFingerDevice::stopBackend() noexcept {
   if (m_sim) m_sim->command(m_actuator);
 }
 
-uhaptics::Fault cExoFingerDevice::servoTick(const uhaptics::Vec3& a_force, const uhaptics::Vec3&,
-                                            const uhaptics::Vec3&, double a_dt, double& a_outputMagnitude) noexcept {
+uhaptics::Fault cExoFingerDevice::servoTick(const ServoInput& a_input, double& a_outputMagnitude) noexcept {
+  // The finger is position-driven: the hand's force (and any torque) has nothing to move.
   const Model& model = *m_model;
   uhaptics::update(model, m_sim->state().q, m_data);
   // The proxy pull in the finger plane (device y, z) -> hand frame -> finger-joint torque.
-  const uhaptics::Vec2 f_hand(a_force.y(), -a_force.z());
+  const uhaptics::Vec2 f_hand = deviceToPlanar(a_input.force);
   Model::TaskVector x_proxy = m_data.x;
   if (!f_hand.isZero(0.0)) {
     const uhaptics::Mat2 Jtip =
@@ -131,24 +124,8 @@ uhaptics::Fault cExoFingerDevice::servoTick(const uhaptics::Vec3& a_force, const
   m_sim->step();
   a_outputMagnitude = std::abs(m_actuator(0));
   uhaptics::update(model, m_sim->state().q, m_data);
-  const uhaptics::Vec3 position = toDevice(m_data.points.fingertip);
-  m_velocity = (position - m_position) / a_dt;
-  m_position = position;
+  updateState(a_input.dt);
   return fault != uhaptics::Fault::kNone ? fault : m_sim->state().fault;
-}
-
-void cExoFingerDevice::readState(uhaptics::Vec3& a_position, uhaptics::Mat3& a_rotation,
-                                 uhaptics::Vec3& a_linearVelocity, uhaptics::Vec3& a_angularVelocity) noexcept {
-  a_position = m_position;
-  a_rotation.setIdentity();
-  a_linearVelocity = m_velocity;
-  a_angularVelocity.setZero();
-}
-
-int cExoFingerDevice::readJointAngles(double a_q[C_MAX_DOF]) noexcept {
-  a_q[0] = m_data.q(0);  // l_x [m]
-  a_q[1] = m_data.q(1);  // q_B [rad]
-  return 2;
 }
 
 uhaptics::Vec2 cExoFingerDevice::getFingerAngles() {

@@ -48,7 +48,7 @@ cTauDevice::cTauDevice(unsigned int a_deviceNumber, const uhaptics::DeviceSelect
         torque = std::min(torque, (model.torqueLimit().array() / (J.transpose() * w).array().abs()).minCoeff());
       }
 
-  setCommonSpecifications("TAU-class 6-DoF parallel device");
+  setCommonSpecifications("TAU-class 6-DoF parallel device", true);
   m_specifications.m_maxLinearForce = force;
   m_specifications.m_maxAngularTorque = torque;
   m_specifications.m_maxLinearStiffness = 6000.0;  // paper 001's spring-wall baseline
@@ -56,12 +56,7 @@ cTauDevice::cTauDevice(unsigned int a_deviceNumber, const uhaptics::DeviceSelect
   m_specifications.m_maxLinearDamping = 4.0;       // paper 001: Colgate's bound b > K T / 2 for 6000 N/m at 1 kHz
   m_specifications.m_maxAngularDamping = 0.01;     // assumed
   m_specifications.m_workspaceRadius = model.workspaceHalfSide();  // the 50 mm cube's inscribed sphere
-  m_specifications.m_sensedPosition = true;
-  m_specifications.m_sensedRotation = true;
-  m_specifications.m_actuatedPosition = true;
-  m_specifications.m_actuatedRotation = true;
-  m_specifications.m_rightHand = true;
-  m_specifications.m_leftHand = true;
+  updateState();  // at home until opened
 }
 
 cTauDevice::~cTauDevice() { close(); }
@@ -91,6 +86,7 @@ void cTauDevice::startBackend() {
   m_contact = Contact::kFree;
   m_lqrEngaged = false;
   m_tau.setZero();
+  updateState();
 }
 
 void cTauDevice::stopBackend() noexcept {
@@ -139,14 +135,13 @@ void cTauDevice::updateContact(const uhaptics::Vec3& a_force) noexcept {
   }
 }
 
-uhaptics::Fault cTauDevice::servoTick(const uhaptics::Vec3& a_force, const uhaptics::Vec3& a_torque,
-                                      const uhaptics::Vec3& a_handForce, double a_dt, double& a_outputMagnitude) noexcept {
-  (void)a_dt;  // the model's servo period (checked equal at construction)
+uhaptics::Fault cTauDevice::servoTick(const ServoInput& a_input, double& a_outputMagnitude) noexcept {
+  // a_input.dt is the model's servo period (checked equal at construction).
   const uhaptics::TauModel& model = *m_model;
   const uhaptics::Vec6& q = m_sim->encoderReading();
   uhaptics::Fault fault = model.forward(q, *m_data);
   if (fault == uhaptics::Fault::kNone) {
-    updateContact(a_force);
+    updateContact(a_input.force);
     if (m_contact != Contact::kLqr) m_surface.active = false;
     // The wall renderer runs every tick: its observer must be settled when a contact begins, and
     // in free space it is the gravity compensation.
@@ -160,7 +155,7 @@ uhaptics::Fault cTauDevice::servoTick(const uhaptics::Vec3& a_force, const uhapt
     m_lqrEngaged = m_contact == Contact::kLqr && wall.in_contact;
     if (!m_lqrEngaged.load()) {
       uhaptics::Vec6 wrench;
-      wrench << a_force, a_torque;
+      wrench << a_input.force, a_input.torque;
       m_tau.noalias() += m_data->J.transpose() * wrench;  // the application's spring (the baseline)
       uhaptics::scaleIntoBox(m_tau, model.torqueLimit());
     }
@@ -169,32 +164,25 @@ uhaptics::Fault cTauDevice::servoTick(const uhaptics::Vec3& a_force, const uhapt
     m_tau.setZero();
     if (fault == uhaptics::Fault::kNone) fault = uhaptics::Fault::kNonFiniteResult;
   }
-  const uhaptics::Fault sim_fault = m_sim->step(m_tau, a_handForce);
+  const uhaptics::Fault sim_fault = m_sim->step(m_tau, a_input.handForce);
   a_outputMagnitude = m_tau.cwiseAbs().maxCoeff();
+  updateState();
   return fault != uhaptics::Fault::kNone ? fault : sim_fault;
 }
 
-void cTauDevice::readState(uhaptics::Vec3& a_position, uhaptics::Mat3& a_rotation, uhaptics::Vec3& a_linearVelocity,
-                           uhaptics::Vec3& a_angularVelocity) noexcept {
-  if (!m_sim) {
-    a_position.setZero();
-    a_rotation.setIdentity();
-    a_linearVelocity.setZero();
-    a_angularVelocity.setZero();
+void cTauDevice::updateState() noexcept {
+  if (!m_sim) {  // before the first open(): at home, at rest
+    m_state.position = m_model->homePose().head<3>() - m_centre;
+    m_state.joints = m_model->homeJoints();
     return;
   }
   const uhaptics::Vec6& pose = m_sim->pose();
-  a_position = pose.head<3>() - m_centre;
-  a_rotation = uhaptics::PoseRotation(pose).R;
-  a_linearVelocity = m_sim->toolVelocity();
+  m_state.position = pose.head<3>() - m_centre;
+  m_state.rotation = uhaptics::PoseRotation(pose).R;
+  m_state.linearVelocity = m_sim->toolVelocity();
   // Pose-angle rates; within TAU's +-10 deg they are the angular velocity to within 2 %.
-  a_angularVelocity = (m_data->J * m_sim->qd()).tail<3>();
-}
-
-int cTauDevice::readJointAngles(double a_q[C_MAX_DOF]) noexcept {
-  const uhaptics::Vec6 q = m_sim ? m_sim->q() : m_model->homeJoints();
-  for (int i = 0; i < 6; ++i) a_q[i] = q(i);
-  return 6;
+  m_state.angularVelocity = (m_data->J * m_sim->qd()).tail<3>();
+  m_state.joints = m_sim->q();
 }
 
 }  // namespace chai3d

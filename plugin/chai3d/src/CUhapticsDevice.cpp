@@ -30,7 +30,7 @@ cUhapticsDevice::cUhapticsDevice(unsigned int a_deviceNumber, const uhaptics::De
 
 cUhapticsDevice::~cUhapticsDevice() { stopStatsWriter(); }
 
-void cUhapticsDevice::setCommonSpecifications(const std::string& a_modelName) {
+void cUhapticsDevice::setCommonSpecifications(const std::string& a_modelName, bool a_orientation) {
   m_specifications.m_model = C_HAPTIC_DEVICE_CUSTOM;
   m_specifications.m_modelName = a_modelName + " (uhaptics, " + m_selection.backend + ")";
   m_specifications.m_manufacturerName = "uhaptics";
@@ -40,6 +40,17 @@ void cUhapticsDevice::setCommonSpecifications(const std::string& a_modelName) {
   m_specifications.m_gripperMaxAngleRad = 0.0;
   m_specifications.m_sensedGripper = false;
   m_specifications.m_actuatedGripper = false;
+  m_specifications.m_sensedPosition = true;
+  m_specifications.m_actuatedPosition = true;
+  m_specifications.m_sensedRotation = a_orientation;
+  m_specifications.m_actuatedRotation = a_orientation;
+  m_specifications.m_rightHand = true;
+  m_specifications.m_leftHand = true;
+  if (!a_orientation) {
+    m_specifications.m_maxAngularTorque = 0.0;
+    m_specifications.m_maxAngularStiffness = 0.0;
+    m_specifications.m_maxAngularDamping = 0.0;
+  }
 }
 
 std::string cUhapticsDevice::paramsDirectory() {
@@ -126,16 +137,15 @@ uhaptics::Fault cUhapticsDevice::getLastFault() {
 }
 
 void cUhapticsDevice::tickLocked() noexcept {
-  uhaptics::Vec3 position, linear, angular;
-  uhaptics::Mat3 rotation;
-  readState(position, rotation, linear, angular);
   const double t = static_cast<double>(m_ticks) * m_servoPeriod;
-  const uhaptics::Vec3 hand = m_handEnabled ? m_hand->force(t, position, linear) : uhaptics::Vec3::Zero();
-  const uhaptics::Vec3 zero = uhaptics::Vec3::Zero();
   const bool sendForce = m_forcesEnabled;
+  ServoInput input;
+  input.force = sendForce ? m_commandForce : uhaptics::Vec3::Zero();
+  input.torque = sendForce ? m_commandTorque : uhaptics::Vec3::Zero();
+  input.handForce = m_handEnabled ? m_hand->force(t, m_state.position, m_state.linearVelocity) : uhaptics::Vec3::Zero();
+  input.dt = m_servoPeriod;
   double output = 0.0;
-  m_lastFault = servoTick(sendForce ? m_commandForce : zero, sendForce ? m_commandTorque : zero, hand,
-                          m_servoPeriod, output);
+  m_lastFault = servoTick(input, output);
   ++m_ticks;
   m_stats.recordTick(sendForce ? m_commandForce.norm() : 0.0, output, m_lastFault != uhaptics::Fault::kNone);
 }
@@ -163,48 +173,34 @@ void cUhapticsDevice::advanceLocked(bool a_oneTick) noexcept {
 bool cUhapticsDevice::getPosition(cVector3d& a_position) {
   std::lock_guard<std::mutex> lock(m_mutex);
   if (!m_lockStep) advanceLocked(false);  // a read-only application still sees the hand move it
-  uhaptics::Vec3 position, linear, angular;
-  uhaptics::Mat3 rotation;
-  readState(position, rotation, linear, angular);
-  a_position = toChai(position);
-  m_linearVelocity = toChai(linear);
+  a_position = toChai(m_state.position);
+  m_linearVelocity = toChai(m_state.linearVelocity);  // the state knows it: no finite-difference estimate
   return m_deviceReady;
 }
 
 bool cUhapticsDevice::getRotation(cMatrix3d& a_rotation) {
   std::lock_guard<std::mutex> lock(m_mutex);
-  uhaptics::Vec3 position, linear, angular;
-  uhaptics::Mat3 rotation;
-  readState(position, rotation, linear, angular);
-  a_rotation.set(rotation(0, 0), rotation(0, 1), rotation(0, 2), rotation(1, 0), rotation(1, 1), rotation(1, 2),
-                 rotation(2, 0), rotation(2, 1), rotation(2, 2));
-  m_angularVelocity = toChai(angular);
+  const uhaptics::Mat3& r = m_state.rotation;
+  a_rotation.set(r(0, 0), r(0, 1), r(0, 2), r(1, 0), r(1, 1), r(1, 2), r(2, 0), r(2, 1), r(2, 2));
+  m_angularVelocity = toChai(m_state.angularVelocity);
   return m_deviceReady;
 }
 
 bool cUhapticsDevice::getLinearVelocity(cVector3d& a_linearVelocity) {
-  // The simulated state (or the board) knows the velocity: no finite-difference estimate needed.
   std::lock_guard<std::mutex> lock(m_mutex);
-  uhaptics::Vec3 position, linear, angular;
-  uhaptics::Mat3 rotation;
-  readState(position, rotation, linear, angular);
-  a_linearVelocity = m_linearVelocity = toChai(linear);
+  a_linearVelocity = m_linearVelocity = toChai(m_state.linearVelocity);
   return m_deviceReady;
 }
 
 bool cUhapticsDevice::getAngularVelocity(cVector3d& a_angularVelocity) {
   std::lock_guard<std::mutex> lock(m_mutex);
-  uhaptics::Vec3 position, linear, angular;
-  uhaptics::Mat3 rotation;
-  readState(position, rotation, linear, angular);
-  a_angularVelocity = m_angularVelocity = toChai(angular);
+  a_angularVelocity = m_angularVelocity = toChai(m_state.angularVelocity);
   return m_deviceReady;
 }
 
 bool cUhapticsDevice::getJointAnglesRad(double a_jointAnglesRad[C_MAX_DOF]) {
   std::lock_guard<std::mutex> lock(m_mutex);
-  for (int i = 0; i < C_MAX_DOF; ++i) a_jointAnglesRad[i] = 0.0;
-  readJointAngles(a_jointAnglesRad);
+  for (int i = 0; i < C_MAX_DOF; ++i) a_jointAnglesRad[i] = i < m_state.joints.size() ? m_state.joints(i) : 0.0;
   return m_deviceReady;
 }
 

@@ -1,6 +1,7 @@
 #include "uhaptics/chai3d/device_registry.hpp"
 
 #include "uhaptics/chai3d/CExoFingerDevice.hpp"
+#include "uhaptics/chai3d/CRedundantPlanarDevice.hpp"
 #include "uhaptics/chai3d/CTauDevice.hpp"
 
 #include <algorithm>
@@ -24,6 +25,10 @@ const std::vector<Entry>& entries() {
        [](const DeviceSelection& s, unsigned int n) -> chai3d::cUhapticsDevicePtr { return chai3d::cExoFingerDevice::create(s, n); }},
       {"tau", "TAU-class 6-DoF parallel device, LQR wall on stiff contact (paper 001)", {"sim"},
        [](const DeviceSelection& s, unsigned int n) -> chai3d::cUhapticsDevicePtr { return chai3d::cTauDevice::create(s, n); }},
+      {"rhi", "4-DoF planar redundant interface, J^T F + FME null-space control (paper 003)", {"sim"},
+       [](const DeviceSelection& s, unsigned int n) -> chai3d::cUhapticsDevicePtr {
+         return chai3d::cRedundantPlanarDevice::create(s, n);
+       }},
   };
   return table;
 }

@@ -53,17 +53,14 @@ class cExoFingerDevice : public cUhapticsDevice {
  protected:
   virtual void startBackend();
   virtual void stopBackend() noexcept;
-  virtual uhaptics::Fault servoTick(const uhaptics::Vec3& a_force, const uhaptics::Vec3& a_torque,
-                                    const uhaptics::Vec3& a_handForce, double a_dt, double& a_outputMagnitude) noexcept;
-  virtual void readState(uhaptics::Vec3& a_position, uhaptics::Mat3& a_rotation, uhaptics::Vec3& a_linearVelocity,
-                         uhaptics::Vec3& a_angularVelocity) noexcept;
-  virtual int readJointAngles(double a_q[C_MAX_DOF]) noexcept;
+  virtual uhaptics::Fault servoTick(const ServoInput& a_input, double& a_outputMagnitude) noexcept;
 
  private:
   using Model = uhaptics::ExoFingerModel;
   using Renderer = uhaptics::NonlinearSubspaceRenderer<Model>;
   uhaptics::Vec2 fingertip(const Model::TaskVector& a_x) const noexcept;
-  uhaptics::Vec3 toDevice(const uhaptics::Vec2& a_handPoint) const noexcept;
+  /// m_state from m_data (finger assembled at the latest joint reading).
+  void updateState(double a_dt) noexcept;
 
   std::unique_ptr<const Model> m_model;  // the sim and the renderer keep references to it
   std::unique_ptr<uhaptics::ExoFingerSim> m_sim;
@@ -71,8 +68,6 @@ class cExoFingerDevice : public cUhapticsDevice {
   uhaptics::ExoFingerData m_data;
   double m_couplingStiffness;                       // Z_x (scalar), N m/rad
   uhaptics::Vec2 m_centre = uhaptics::Vec2::Zero();  // fingertip workspace centre, hand frame
-  uhaptics::Vec3 m_position = uhaptics::Vec3::Zero();
-  uhaptics::Vec3 m_velocity = uhaptics::Vec3::Zero();
   Model::ActuatorVector m_actuator = Model::ActuatorVector::Zero();
 };
 

@@ -52,15 +52,12 @@ class cTauDevice : public cUhapticsDevice {
  protected:
   virtual void startBackend();
   virtual void stopBackend() noexcept;
-  virtual uhaptics::Fault servoTick(const uhaptics::Vec3& a_force, const uhaptics::Vec3& a_torque,
-                                    const uhaptics::Vec3& a_handForce, double a_dt, double& a_outputMagnitude) noexcept;
-  virtual void readState(uhaptics::Vec3& a_position, uhaptics::Mat3& a_rotation, uhaptics::Vec3& a_linearVelocity,
-                         uhaptics::Vec3& a_angularVelocity) noexcept;
-  virtual int readJointAngles(double a_q[C_MAX_DOF]) noexcept;
+  virtual uhaptics::Fault servoTick(const ServoInput& a_input, double& a_outputMagnitude) noexcept;
 
  private:
   enum class Contact { kFree, kProbing, kLqr };
   void updateContact(const uhaptics::Vec3& a_force) noexcept;
+  void updateState() noexcept;  // m_state from the simulated device
 
   std::unique_ptr<const uhaptics::TauModel> m_model;  // sim and renderers keep references
   std::unique_ptr<uhaptics::SimulatedTau> m_sim;

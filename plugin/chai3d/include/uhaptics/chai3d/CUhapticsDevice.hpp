@@ -13,8 +13,9 @@
 // of simulation). In lock-step mode every setForceAndTorqueAndGripperForce() call is exactly one
 // servo tick: deterministic, for tests.
 //
-// Subclasses implement the device: its specification (in the constructor), its backend and its
-// rendering method (the protected hooks). All hooks run with the device mutex held.
+// Subclasses implement only what differs between devices: their specification (in the
+// constructor), their backend and their rendering method (the three protected hooks, which keep
+// m_state current). All hooks run with the device mutex held.
 #include <atomic>
 #include <chrono>
 #include <condition_variable>
@@ -89,30 +90,51 @@ class cUhapticsDevice : public cGenericHapticDevice {
   cUhapticsDevice(unsigned int a_deviceNumber, const uhaptics::DeviceSelection& a_selection,
                   double a_servoPeriod);
 
-  /// Sets up and starts the backend; throws uhaptics::Error with a message when it cannot.
+  /// Sets up and starts the backend and sets m_state; throws uhaptics::Error with a message when it
+  /// cannot.
   virtual void startBackend() = 0;
   /// Leaves the device with a zero command and releases the backend. Must not throw.
   virtual void stopBackend() noexcept = 0;
-  /// One servo period: render the application's force/torque (device frame) through the device's
-  /// method, apply the scripted hand's force (zero when there is none) and advance dt. Returns the
-  /// fault (zero command sent) and the largest actuator command magnitude in a_outputMagnitude.
-  virtual uhaptics::Fault servoTick(const uhaptics::Vec3& a_force, const uhaptics::Vec3& a_torque,
-                                    const uhaptics::Vec3& a_handForce, double a_dt,
-                                    double& a_outputMagnitude) noexcept = 0;
-  /// State in CHAI3D's device frame, origin at the workspace centre.
-  virtual void readState(uhaptics::Vec3& a_position, uhaptics::Mat3& a_rotation,
-                         uhaptics::Vec3& a_linearVelocity, uhaptics::Vec3& a_angularVelocity) noexcept = 0;
-  /// Joint angles (actuated and sensed) [rad or m for prismatic joints]; returns how many.
-  virtual int readJointAngles(double a_q[C_MAX_DOF]) noexcept = 0;
+  /// What one servo period gets: the application's force [N] and torque [N m] in the device frame
+  /// (zero while forces are disabled) and the scripted hand's force (zero when there is none).
+  struct ServoInput {
+    uhaptics::Vec3 force, torque, handForce;
+    double dt;  // the servo period [s]
+  };
+  /// One servo period: render the application's force/torque through the device's method, apply
+  /// the hand's force, advance dt and update m_state. Returns the fault (zero command sent) and
+  /// the largest actuator command magnitude in a_outputMagnitude.
+  virtual uhaptics::Fault servoTick(const ServoInput& a_input, double& a_outputMagnitude) noexcept = 0;
+  /// What the device senses, in CHAI3D's device frame with the origin at the workspace centre. The
+  /// subclass keeps it current: startBackend() sets the initial state, servoTick() the new one.
+  struct State {
+    uhaptics::Vec3 position = uhaptics::Vec3::Zero();
+    uhaptics::Mat3 rotation = uhaptics::Mat3::Identity();
+    uhaptics::Vec3 linearVelocity = uhaptics::Vec3::Zero();
+    uhaptics::Vec3 angularVelocity = uhaptics::Vec3::Zero();
+    /// Joint angles (actuated and sensed) [rad, or m for prismatic joints]; no heap (fixed maximum).
+    Eigen::Matrix<double, Eigen::Dynamic, 1, Eigen::ColMajor, C_MAX_DOF, 1> joints;
+  };
 
-  /// Fills the fields every uhaptics device shares (manufacturer, no gripper, no switches).
-  void setCommonSpecifications(const std::string& a_modelName);
+  /// Fills the fields every uhaptics device shares (manufacturer, no gripper, no switches, position
+  /// sensed and actuated, both hands) and whether the orientation is too; without it every angular
+  /// limit is 0. The subclass then sets its forces, stiffness, damping and workspace.
+  void setCommonSpecifications(const std::string& a_modelName, bool a_orientation);
+  /// Planar devices (exoskeleton finger, RHI) work in the device frame's y-z plane: task x -> +y,
+  /// task y -> -z; the device x axis is never sensed nor actuated.
+  static uhaptics::Vec3 planarToDevice(const uhaptics::Vec2& a_task) noexcept {
+    return uhaptics::Vec3(0.0, a_task.x(), -a_task.y());
+  }
+  static uhaptics::Vec2 deviceToPlanar(const uhaptics::Vec3& a_device) noexcept {
+    return uhaptics::Vec2(a_device.y(), -a_device.z());
+  }
   /// Folder of the device parameter files: $UHAPTICS_PARAMS_DIR, else the one this build ships.
   static std::string paramsDirectory();
   /// Held during every hook; subclass accessors that read device state take it too.
   std::mutex& deviceMutex() { return m_mutex; }
 
   uhaptics::DeviceSelection m_selection;
+  State m_state;
 
  private:
   using Clock = std::chrono::steady_clock;

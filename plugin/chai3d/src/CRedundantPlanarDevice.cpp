@@ -1,0 +1,110 @@
+#include "uhaptics/chai3d/CRedundantPlanarDevice.hpp"
+
+#include <Eigen/Eigenvalues>
+#include <cmath>
+
+namespace chai3d {
+namespace {
+
+// The controller's options from the selection ("options/rhi/<name>" in the config file, or set in
+// code); the controller's defaults are paper 003's. Ranges here only catch typos; the controller
+// checks consistency (eps1 <= eps2) and the device constructor reports it.
+uhaptics::FmeControllerOptions<2> optionsFrom(const uhaptics::DeviceSelection& s) {
+  uhaptics::FmeControllerOptions<2> o;
+  const double mode = s.option("mode", 0.0, 0.0, 2.0);
+  o.mode = mode == 1.0 ? uhaptics::FmeEllipsoidMode::kFree
+                       : mode == 2.0 ? uhaptics::FmeEllipsoidMode::kStiff : uhaptics::FmeEllipsoidMode::kAuto;
+  o.mu = s.option("mu", o.mu, 1e-3, 1e3);
+  o.beta = s.option("beta", o.beta, 0.0, 1e4);
+  o.damping = s.option("damping", o.damping, 0.0, 100.0);
+  o.observer_shape = s.option("observer_shape", o.observer_shape, 1e-3, 1e4);
+  o.transition.enter_stiff_below = s.option("eps1", o.transition.enter_stiff_below, 0.0, 1.0);
+  o.transition.leave_stiff_at = s.option("eps2", o.transition.leave_stiff_at, 0.0, 1.0);
+  o.transition.rho = s.option("rho", o.transition.rho, 0.0, 10.0);
+  return o;
+}
+
+}  // namespace
+
+cRedundantPlanarDevice::cRedundantPlanarDevice(unsigned int a_deviceNumber, const uhaptics::DeviceSelection& a_selection)
+    : cUhapticsDevice(a_deviceNumber, a_selection, 1e-3),
+      m_model(std::make_unique<Model>(Model::fromFile(paramsDirectory() + "/rhi4.json", "rhi4"))) {
+  const Model& model = *m_model;
+  try {
+    m_controller = std::make_unique<Controller>(model, model.torqueLimits(), model.home(), optionsFrom(a_selection));
+  } catch (const uhaptics::Error& e) {
+    throw uhaptics::Error(std::string("device rhi (options/rhi/...): ") + e.what());
+  }
+  model.forward(model.home(), m_centre);
+
+  // The force the device can produce in every direction at home: torques tau = J^T F within the
+  // ellipse sum (tau_i / T_i)^2 <= 1 allow |F| = 1 / sqrt(u^T J W^2 J^T u) along u; the minimum
+  // over u (inside the actual box of limits, so conservative).
+  Model::Jacobian J;
+  model.jacobian(model.home(), J);
+  const Model::JointVector w = model.torqueLimits().cwiseInverse();
+  const uhaptics::Mat2 JWWJt = J * w.cwiseAbs2().asDiagonal() * J.transpose();
+  const double lambda_max = Eigen::SelfAdjointEigenSolver<uhaptics::Mat2>(JWWJt, Eigen::EigenvaluesOnly).eigenvalues()(1);
+
+  setCommonSpecifications("4-DoF planar redundant interface", false);
+  m_specifications.m_maxLinearForce = 1.0 / std::sqrt(lambda_max);
+  m_specifications.m_maxLinearStiffness = 1000.0;  // paper 003's stiff environment K_e
+  m_specifications.m_maxLinearDamping = 5.0;       // assumed: well inside 1 kHz stability for these masses
+  // Assumed: a 10 cm disc around home keeps the arm far from the 0.786 m reach boundary.
+  m_specifications.m_workspaceRadius = a_selection.option("workspace_radius", 0.1, 0.01, 0.3);
+  m_state.joints = model.home();
+}
+
+cRedundantPlanarDevice::~cRedundantPlanarDevice() { close(); }
+
+void cRedundantPlanarDevice::startBackend() {
+  if (m_selection.backend != "sim") throw uhaptics::Error("the RHI has no '" + m_selection.backend + "' backend");
+  m_sim = std::make_unique<uhaptics::SimulatedPlanarLinkage<4>>(*m_model);
+  m_sim->reset(m_model->home());
+  m_controller->reset();
+  m_tau.setZero();
+  updateState();
+}
+
+void cRedundantPlanarDevice::stopBackend() noexcept { m_tau.setZero(); }
+
+uhaptics::Fault cRedundantPlanarDevice::servoTick(const ServoInput& a_input, double& a_outputMagnitude) noexcept {
+  // A planar device: only the in-plane force is rendered (no torque, x not actuated).
+  const uhaptics::Fault fault =
+      m_controller->tick(m_sim->time(), m_sim->position(), m_sim->velocity(), deviceToPlanar(a_input.force), m_tau);
+  uhaptics::EndEffectorLoad hand;
+  hand.bias = deviceToPlanar(a_input.handForce);  // constant over the period
+  m_sim->setLoad(hand);
+  const uhaptics::Fault sim_fault = m_sim->step(m_tau, a_input.dt);
+  a_outputMagnitude = m_tau.cwiseAbs().maxCoeff();
+  updateState();
+  return fault != uhaptics::Fault::kNone ? fault : sim_fault;
+}
+
+void cRedundantPlanarDevice::updateState() noexcept {
+  m_state.position = planarToDevice(m_sim->endEffectorPosition() - m_centre);
+  m_state.linearVelocity = planarToDevice(m_sim->endEffectorVelocity());
+  m_state.joints = m_sim->position();
+}
+
+bool cRedundantPlanarDevice::setNullSpaceOptions(const Controller::Options& a_options) {
+  std::lock_guard<std::mutex> lock(deviceMutex());
+  return m_controller->setOptions(a_options) == uhaptics::Fault::kNone;
+}
+
+cRedundantPlanarDevice::Controller::Options cRedundantPlanarDevice::getNullSpaceOptions() {
+  std::lock_guard<std::mutex> lock(deviceMutex());
+  return m_controller->options();
+}
+
+cRedundantPlanarDevice::Controller::Status cRedundantPlanarDevice::getNullSpaceStatus() {
+  std::lock_guard<std::mutex> lock(deviceMutex());
+  return m_controller->status();
+}
+
+cRedundantPlanarDevice::Model::JointVector cRedundantPlanarDevice::getJointPositions() {
+  std::lock_guard<std::mutex> lock(deviceMutex());
+  return m_sim ? m_sim->position() : m_model->home();
+}
+
+}  // namespace chai3d
