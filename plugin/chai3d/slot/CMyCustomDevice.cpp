@@ -66,6 +66,21 @@ bool readSelectionLocked(Slot& s) {
   return s.selected;
 }
 
+// One reading and its rate, forwarded: a closed slot answers a_closed and C_ERROR. The rate goes to
+// the slot's own member because cMyCustomDevice does not declare CHAI3D's rate getters (the base
+// class answers them from those members).
+template <class Value, class Rate>
+bool forwardReading(bool a_ready, cUhapticsDevice* a_device, Value& a_value, const Value& a_closed,
+                    bool (cUhapticsDevice::*a_read)(Value&), bool (cUhapticsDevice::*a_readRate)(Rate&), Rate& a_rate) {
+  if (!a_ready) {
+    a_value = a_closed;
+    return C_ERROR;
+  }
+  const bool ok = (a_device->*a_read)(a_value);
+  (a_device->*a_readRate)(a_rate);
+  return ok;
+}
+
 cUhapticsDevice* target(int index) {
   if (index < 0 || index >= static_cast<int>(C_MAX_HAPTIC_DEVICES)) return nullptr;
   return slot().devices[index].get();
@@ -126,36 +141,18 @@ bool cMyCustomDevice::calibrate(bool a_forceCalibration) {
 }
 
 bool cMyCustomDevice::getPosition(cVector3d& a_position) {
-  cUhapticsDevice* device = target(m_MyVariable);
-  if (!m_deviceReady) {
-    a_position.zero();
-    return C_ERROR;
-  }
-  const bool ok = device->getPosition(a_position);
-  device->getLinearVelocity(m_linearVelocity);  // answered by the base class's getLinearVelocity()
-  return ok;
+  return forwardReading(m_deviceReady, target(m_MyVariable), a_position, cVector3d(0.0, 0.0, 0.0),
+                        &cUhapticsDevice::getPosition, &cUhapticsDevice::getLinearVelocity, m_linearVelocity);
 }
 
 bool cMyCustomDevice::getRotation(cMatrix3d& a_rotation) {
-  cUhapticsDevice* device = target(m_MyVariable);
-  if (!m_deviceReady) {
-    a_rotation.identity();
-    return C_ERROR;
-  }
-  const bool ok = device->getRotation(a_rotation);
-  device->getAngularVelocity(m_angularVelocity);
-  return ok;
+  return forwardReading(m_deviceReady, target(m_MyVariable), a_rotation, cIdentity3d(), &cUhapticsDevice::getRotation,
+                        &cUhapticsDevice::getAngularVelocity, m_angularVelocity);
 }
 
 bool cMyCustomDevice::getGripperAngleRad(double& a_angle) {
-  cUhapticsDevice* device = target(m_MyVariable);
-  if (!m_deviceReady) {
-    a_angle = 0.0;
-    return C_ERROR;
-  }
-  const bool ok = device->getGripperAngleRad(a_angle);
-  device->getGripperAngularVelocity(m_gripperAngularVelocity);
-  return ok;
+  return forwardReading(m_deviceReady, target(m_MyVariable), a_angle, 0.0, &cUhapticsDevice::getGripperAngleRad,
+                        &cUhapticsDevice::getGripperAngularVelocity, m_gripperAngularVelocity);
 }
 
 bool cMyCustomDevice::getUserSwitches(unsigned int& a_userSwitches) {
