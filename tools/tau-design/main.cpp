@@ -1,5 +1,6 @@
-// uhaptics-tau-design: designs the LQR wall gains (paper 001 weights by default) for a TAU
-// parameter file at an operating pose and writes them to a JSON file.
+// uhaptics-tau-design: designs the LQR wall gains for a TAU
+// parameter file at an operating pose and writes them to a JSON file. Default weights: tuned for our
+// assumed plant (README, TAU section); --weights 1 1e3 1e7 1 gives paper 001's.
 //   uhaptics-tau-design [--params tau.json] [--pose x y z a b g] [--weights v p i r] [--out gains.json]
 #include <CLI/CLI.hpp>
 #include <chrono>
@@ -32,7 +33,8 @@ int main(int argc, char** argv) {
   std::string params = std::string(UHAPTICS_PARAMS_DIR) + "/tau.json";
   std::string out = "out/tau-design/gains.json";
   std::vector<double> pose(6, 0.0);
-  std::vector<double> weights = {1.0, 1e3, 1e7, 1.0};
+  const LqrWallWeights defaults;  // tuned for tau.json (README); paper 001: 1 1e3 1e7 1
+  std::vector<double> weights = {defaults.velocity, defaults.position, defaults.integral, defaults.torque};
   app.add_option("--params", params, "device parameter file");
   app.add_option("--pose", pose, "operating pose x y z (m) alpha beta gamma (rad)")->expected(6);
   app.add_option("--weights", weights, "Q weights on velocity, position, integral; R weight")->expected(4);

@@ -35,6 +35,7 @@ RunMetrics simulateRun(const TauModel& model, const LqrWallGains& gains, const R
   so.quantize = spec.quantize;
   so.seed = spec.seed ^ 0x9e3779b97f4a7c15ULL;
   so.tool_damping = spec.controller == Controller::kSpring ? params.device_damping : 0.0;
+  so.tool_rotational_damping = spec.controller == Controller::kSpring ? params.device_rotational_damping : 0.0;
   SimulatedTau sim(model, so);
   Vec6 start_pose = model.homePose();
   start_pose(0) = spec.x;
@@ -129,11 +130,12 @@ RunMetrics simulateRun(const TauModel& model, const LqrWallGains& gains, const R
 
 namespace {
 
-// The LQR joint regulator of eq. 11 (u = g(q) - Kc (x - x_ref) - Ki x_i, x_i' = r - q) on the ideal-
-// sensor simulator: what the paper's requirement checks exercise. Calls back with each state.
+// The LQR joint regulator of eq. 11 (u = g(q) - Kc x - Ki x_i, x_i' = r - q, x measured from the
+// equilibrium held at the start) on the ideal-sensor simulator: what the paper's requirement checks
+// exercise. Calls back with each state.
 template <typename Observe>
-void regulate(const TauModel& model, const LqrWallGains& gains, const Vec6& start_q, const Vec6& reference,
-              double duration, double force_time, double force, Observe&& observe) {
+void regulate(const TauModel& model, const LqrWallGains& gains, Feedback feedback, const Vec6& start_q,
+              const Vec6& reference, double duration, double force_time, double force, Observe&& observe) {
   SimulatedTauOptions so;
   so.quantize = false;
   SimulatedTau sim(model, so);
@@ -149,11 +151,12 @@ void regulate(const TauModel& model, const LqrWallGains& gains, const Vec6& star
     if (model.forward(q, data) != Fault::kNone) throw Error("study: forward kinematics failed in a requirement check");
     model.computeGravity(q, data);
     regulator.observe(q);
-    Vec<12> err;
-    err.head<6>() = regulator.velocity();
-    err.tail<6>() = regulator.position() - reference;
-    const Vec6 tau = data.gravity + regulator.control(err);
-    regulator.integrate(err.tail<6>());
+    const bool state = feedback == Feedback::kState;
+    Vec<12> x;
+    x.head<6>() = state ? sim.qd() : regulator.velocity();
+    x.tail<6>() = (state ? sim.q() : regulator.position()) - start_q;
+    const Vec6 tau = data.gravity + regulator.control(x);
+    regulator.integrate(x.tail<6>() + start_q - reference);
     regulator.applied(tau);
     const double t = k * T;
     sim.step(tau, Vec3(0, 0, t >= force_time ? -force : 0.0));
@@ -163,14 +166,15 @@ void regulate(const TauModel& model, const LqrWallGains& gains, const Vec6& star
 
 }  // namespace
 
-StepResponse stepReferenceResponse(const TauModel& model, const LqrWallGains& gains, const Vec6& pose, double step) {
+StepResponse stepReferenceResponse(const TauModel& model, const LqrWallGains& gains, const Vec6& pose, double step,
+                                   Feedback feedback) {
   Vec6 q0, r;
   Vec6 target = pose;
   target(2) += step;
   if (model.inverse(pose, q0) != Fault::kNone || model.inverse(target, r) != Fault::kNone)
     throw Error("study: step reference outside the workspace");
   std::vector<std::pair<double, double>> z;
-  regulate(model, gains, q0, r, 0.5, 1e9, 0.0, [&](double t, const SimulatedTau& sim) {
+  regulate(model, gains, feedback, q0, r, 0.5, 1e9, 0.0, [&](double t, const SimulatedTau& sim) {
     z.emplace_back(t, (sim.pose()(2) - pose(2)) / step);  // normalized response, 1 = target
   });
   StepResponse out;
@@ -186,11 +190,12 @@ StepResponse stepReferenceResponse(const TauModel& model, const LqrWallGains& ga
   return out;
 }
 
-double forceStepDeviation(const TauModel& model, const LqrWallGains& gains, const Vec6& pose, double force) {
+double forceStepDeviation(const TauModel& model, const LqrWallGains& gains, const Vec6& pose, double force,
+                          Feedback feedback) {
   Vec6 r;
   if (model.inverse(pose, r) != Fault::kNone) throw Error("study: force-step pose outside the workspace");
   double worst = 0.0;
-  regulate(model, gains, r, r, 0.6, 0.1, force, [&](double, const SimulatedTau& sim) {
+  regulate(model, gains, feedback, r, r, 0.6, 0.1, force, [&](double, const SimulatedTau& sim) {
     worst = std::max(worst, (sim.q() - r).cwiseAbs().maxCoeff());
   });
   return worst;

@@ -13,7 +13,8 @@ SimulatedTau::SimulatedTau(const TauModel& model, const SimulatedTauOptions& opt
   if (options_.substeps < 1 || options_.substeps > 1000) throw Error("SimulatedTau: substeps must be in [1, 1000]");
   if (options_.max_delay_samples < 0 || options_.max_delay_samples > 100)
     throw Error("SimulatedTau: max_delay_samples must be in [0, 100]");
-  if (!(options_.tool_damping >= 0.0) || !(options_.hand.stiffness >= 0.0) || !(options_.hand.damping >= 0.0))
+  if (!(options_.tool_damping >= 0.0) || !(options_.tool_rotational_damping >= 0.0) || !(options_.hand.stiffness >= 0.0) ||
+      !(options_.hand.damping >= 0.0))
     throw Error("SimulatedTau: damping and hand parameters must be >= 0");
   command_history_.assign(static_cast<std::size_t>(options_.max_delay_samples) + 1, Vec6::Zero());
   reset(model.homeJoints());
@@ -64,6 +65,7 @@ Fault SimulatedTau::step(const Vec6& tau_command, const Vec3& external_force) no
   if (f != Fault::kNone) return f;
   const Eigen::LLT<Mat6> mass(data_.M);
   const Mat<3, 6> Jp = data_.J.topRows<3>();
+  const Mat<3, 6> Jr = data_.J.bottomRows<3>();
   const Vec3 p0 = data_.pose.head<3>();
   const Vec6 q0 = q_;
   const Vec6 drive = applied_ - data_.bias - data_.gravity;
@@ -83,7 +85,9 @@ Fault SimulatedTau::step(const Vec6& tau_command, const Vec3& external_force) no
       hand_sum += fh;
       force += fh;
     }
-    const Vec6 qdd = mass.solve(drive + Jp.transpose() * force);
+    // Rotational damping: a generalized force -b * (Euler-angle rates), dissipative by construction.
+    const Vec3 moment = -options_.tool_rotational_damping * (Jr * qd);
+    const Vec6 qdd = mass.solve(drive + Jp.transpose() * force + Jr.transpose() * moment);
     qd += dt * qdd;  // semi-implicit Euler: velocity first
     q += dt * qd;
   }

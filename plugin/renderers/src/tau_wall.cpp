@@ -8,11 +8,19 @@
 
 namespace uhaptics {
 
-LqrWallGains designLqrWall(const TauModel& model, const Vec6& operating_pose, const LqrWallWeights& w,
-                           const ObserverNoise& noise) {
+namespace {
+
+struct ControllerDesign {
+  LqrWallGains gains;
+  MatX discrete_A, discrete_B;  // augmented, discretized plant (for the observer)
+};
+
+ControllerDesign designController(const TauModel& model, const Vec6& operating_pose, const LqrWallWeights& w,
+                                  bool check_preconditions) {
   if (!(w.velocity >= 0 && w.position >= 0 && w.integral > 0 && w.torque > 0))
     throw Error("designLqrWall: weights must be non-negative (integral and torque weights positive)");
-  LqrWallGains gains;
+  ControllerDesign out;
+  LqrWallGains& gains = out.gains;
   gains.operating_pose = operating_pose;
   if (model.inverse(operating_pose, gains.operating_joints) != Fault::kNone)
     throw Error("designLqrWall: the operating pose is outside the reachable workspace");
@@ -38,6 +46,7 @@ LqrWallGains designLqrWall(const TauModel& model, const Vec6& operating_pose, co
   req.Q = q_diag.asDiagonal();
   req.R = MatX::Identity(6, 6) * w.torque;
   req.period = model.servoPeriod();
+  req.dare.check_preconditions = check_preconditions;
   const LqrDesign d = designLqrWithIntegrators(req);
   gains.Kc = d.Kc;
   gains.Ki = d.Ki;
@@ -49,13 +58,26 @@ LqrWallGains designLqrWall(const TauModel& model, const Vec6& operating_pose, co
   gains.dare_residual = d.dare.relative_residual;
   gains.dare_iterations = d.dare.iterations;
   gains.operating_torque = data.gravity;
+  out.discrete_A = d.discrete.A;
+  out.discrete_B = d.discrete.B;
+  return out;
+}
+
+}  // namespace
+
+LqrWallGains designLqrWall(const TauModel& model, const Vec6& operating_pose, const LqrWallWeights& w,
+                           const ObserverNoise& noise) {
+  ControllerDesign design = designController(model, operating_pose, w, true);
+  LqrWallGains& gains = design.gains;
+  const MatX& Ad = design.discrete_A;
+  const MatX& Bd = design.discrete_B;
 
   // Observer on the discretized (non-augmented) plant plus a random-walk input disturbance.
   MatX Ao = MatX::Zero(18, 18), Bo = MatX::Zero(18, 6), C = MatX::Zero(6, 18);
-  Ao.topLeftCorner(12, 12) = d.discrete.A.topLeftCorner(12, 12);
-  Ao.block(0, 12, 12, 6) = d.discrete.B.topRows(12);  // d enters like the torque
+  Ao.topLeftCorner(12, 12) = Ad.topLeftCorner(12, 12);
+  Ao.block(0, 12, 12, 6) = Bd.topRows(12);  // d enters like the torque
   Ao.bottomRightCorner(6, 6).setIdentity();
-  Bo.topRows(12) = d.discrete.B.topRows(12);
+  Bo.topRows(12) = Bd.topRows(12);
   C.block(0, 6, 6, 6).setIdentity();
   const double sq = noise.quantization > 0.0 ? noise.quantization : model.encoderResolution() / std::sqrt(12.0);
   if (!(noise.velocity_process > 0 && noise.disturbance_process > 0 && noise.position_process > 0 && sq > 0))
@@ -67,22 +89,37 @@ LqrWallGains designLqrWall(const TauModel& model, const Vec6& operating_pose, co
   // Filter DARE = control DARE of the dual pair (Ao^T, C^T).
   const DareResult kf = solveDare(Ao.transpose(), C.transpose(), MatX(qn.asDiagonal()), MatX::Identity(6, 6) * sq * sq);
   const MatX S = C * kf.P * C.transpose() + MatX::Identity(6, 6) * sq * sq;
+  gains.observer_joints = gains.operating_joints;
+  gains.observer_torque = gains.operating_torque;
   gains.observer_A = Ao;
   gains.observer_B = Bo;
   gains.observer_gain = kf.P * C.transpose() * S.inverse();
   return gains;
 }
 
+LqrWallGains redesignLqrWallGains(const TauModel& model, const Vec6& operating_pose, const LqrWallGains& designed,
+                                  const LqrWallWeights& w) {
+  // The structure (stabilizability/detectability) does not change with the operating point inside
+  // the singularity-free workspace; the residual and closed-loop checks still run on every solve.
+  LqrWallGains gains = designController(model, operating_pose, w, false).gains;
+  gains.observer_joints = designed.observer_joints;
+  gains.observer_torque = designed.observer_torque;
+  gains.observer_A = designed.observer_A;
+  gains.observer_B = designed.observer_B;
+  gains.observer_gain = designed.observer_gain;
+  return gains;
+}
+
 void LqrJointRegulator::reset(const Vec6& q_measured) noexcept {
   estimate_.setZero();
-  estimate_.segment<6>(6) = q_measured - gains_.operating_joints;
+  estimate_.segment<6>(6) = q_measured - gains_.observer_joints;
   integral_.setZero();
-  last_torque_ = gains_.operating_torque;
+  last_torque_ = gains_.observer_torque;
 }
 
 void LqrJointRegulator::observe(const Vec6& q_measured) noexcept {
-  const Vec<18> predicted = gains_.observer_A * estimate_ + gains_.observer_B * (last_torque_ - gains_.operating_torque);
-  const Vec6 innovation = q_measured - gains_.operating_joints - predicted.segment<6>(6);
+  const Vec<18> predicted = gains_.observer_A * estimate_ + gains_.observer_B * (last_torque_ - gains_.observer_torque);
+  const Vec6 innovation = q_measured - gains_.observer_joints - predicted.segment<6>(6);
   estimate_ = predicted + gains_.observer_gain * innovation;
 }
 

@@ -2,7 +2,8 @@
 // Simulated TAU: integrates the lumped dynamic model at a finer step than the 1 kHz controller,
 // with joint torque saturation, encoder quantization, an optional random transport delay of the
 // command (0..N whole samples, as in paper 001's CoS-D runs), optional mechanical damping at the
-// tool (the baseline's 4 Ns/m) and a hand model (spring-damper between the tool and a moving hand).
+// tool (the baseline's 4 Ns/m, translational and rotational) and a hand model (spring-damper between
+// the tool and a moving hand).
 //
 // Multi-rate integration: the configuration-dependent terms (forward kinematics, J, M, gravity,
 // velocity terms) are refreshed once per servo period; the substeps integrate with them frozen
@@ -28,6 +29,7 @@ struct SimulatedTauOptions {
   int substeps = 0;               // 0: the model file's rates/simulation_substeps
   int max_delay_samples = 0;      // command delay drawn uniformly from 0..max each sample
   double tool_damping = 0.0;      // mechanical damping at the tool, translational, N s/m
+  double tool_rotational_damping = 0.0;  // on the tool's orientation (Euler-angle) rates, N m s/rad
   bool quantize = true;           // encoder quantization (false: ideal sensor, for design checks)
   std::uint64_t seed = 1;         // delay draws
   HandModel hand;
