@@ -104,6 +104,7 @@ void cExoFingerDevice::startBackend() {
 
 void cExoFingerDevice::stopBackend() noexcept {
   m_actuator.setZero();
+  m_fingerTorqueCommand.setZero();
   if (m_sim) m_sim->command(m_actuator);
 }
 
@@ -119,6 +120,7 @@ uhaptics::Fault cExoFingerDevice::servoTick(const ServoInput& a_input, double& a
         uhaptics::centralDifferenceJacobian([&](const uhaptics::Vec2& y) { return fingertip(y); }, m_data.x);
     x_proxy += (Jtip.transpose() * f_hand) / m_couplingStiffness;
   }
+  x_proxy += m_fingerTorqueCommand / m_couplingStiffness;  // multi-point tools' joint torque
   const uhaptics::Fault fault = m_renderer->tick(m_data.q, x_proxy, m_actuator);
   m_sim->command(m_actuator);
   m_sim->step();
@@ -141,6 +143,15 @@ uhaptics::ExoFingerPoints cExoFingerDevice::getFingerPoints() {
 double cExoFingerDevice::getActuatorForce() {
   std::lock_guard<std::mutex> lock(deviceMutex());
   return m_actuator(0);
+}
+
+uhaptics::Vec3 cExoFingerDevice::handToDevice(const uhaptics::Vec2& a_handPoint) const noexcept {
+  return planarToDevice(a_handPoint - m_centre);
+}
+
+void cExoFingerDevice::setFingerJointTorque(const uhaptics::Vec2& a_torque) {
+  std::lock_guard<std::mutex> lock(deviceMutex());
+  m_fingerTorqueCommand = a_torque.allFinite() ? a_torque : uhaptics::Vec2::Zero();
 }
 
 uhaptics::Vec2 cExoFingerDevice::getFingerTorque() {

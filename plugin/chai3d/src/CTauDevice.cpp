@@ -74,6 +74,27 @@ double cTauDevice::getLqrPenetration() {
   return m_lqr->command().penetration;
 }
 
+void cTauDevice::setContactSurface(bool a_active, const cVector3d& a_point, const cVector3d& a_normal) {
+  const uhaptics::Vec3 point(a_point(0), a_point(1), a_point(2));
+  const uhaptics::Vec3 normal(a_normal(0), a_normal(1), a_normal(2));
+  const double length = normal.norm();
+  std::lock_guard<std::mutex> lock(deviceMutex());
+  m_explicitSurface = true;
+  m_explicit.active = a_active && point.allFinite() && std::isfinite(length) && length > 0.0;
+  if (m_explicit.active) {
+    m_explicit.point = point + m_centre;  // device frame -> model frame
+    m_explicit.normal = normal / length;
+  }
+}
+
+void cTauDevice::clearContactSurface() {
+  std::lock_guard<std::mutex> lock(deviceMutex());
+  m_explicitSurface = false;
+  m_explicit.active = false;
+  m_contact = Contact::kFree;
+  m_surface.active = false;
+}
+
 void cTauDevice::startBackend() {
   if (m_selection.backend != "sim") throw uhaptics::Error("TAU has no '" + m_selection.backend + "' backend");
   uhaptics::SimulatedTauOptions options;
@@ -92,6 +113,7 @@ void cTauDevice::startBackend() {
 void cTauDevice::stopBackend() noexcept {
   m_tau.setZero();
   m_lqrEngaged = false;
+  m_explicit.active = false;
 }
 
 void cTauDevice::updateContact(const uhaptics::Vec3& a_force) noexcept {
@@ -141,8 +163,13 @@ uhaptics::Fault cTauDevice::servoTick(const ServoInput& a_input, double& a_outpu
   const uhaptics::Vec6& q = m_sim->encoderReading();
   uhaptics::Fault fault = model.forward(q, *m_data);
   if (fault == uhaptics::Fault::kNone) {
-    updateContact(a_input.force);
-    if (m_contact != Contact::kLqr) m_surface.active = false;
+    if (m_explicitSurface) {
+      m_surface = m_explicit;
+      m_contact = m_surface.active ? Contact::kLqr : Contact::kFree;
+    } else {
+      updateContact(a_input.force);
+      if (m_contact != Contact::kLqr) m_surface.active = false;
+    }
     // The wall renderer runs every tick: its observer must be settled when a contact begins, and
     // in free space it is the gravity compensation.
     const uhaptics::WallCommand& wall = m_lqr->tick(q, m_surface, &m_data->pose);

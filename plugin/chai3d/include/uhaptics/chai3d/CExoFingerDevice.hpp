@@ -49,6 +49,12 @@ class cExoFingerDevice : public cUhapticsDevice {
   /// The actuator force of the latest tick [N] and the finger-joint torques the user felt [N m].
   double getActuatorForce();
   uhaptics::Vec2 getFingerTorque();
+  /// Multi-point tools (cExoFingerTool): a virtual-finger joint torque (MCP, PIP) [N m] from
+  /// contacts on several phalanges, added to the one read from the Cartesian force and held until
+  /// replaced; rendered through the subspace proxy like that one. Non-finite input counts as zero.
+  void setFingerJointTorque(const uhaptics::Vec2& a_torque);
+  /// A hand-frame point (ExoFingerPoints, model geometry) in this device's frame [m].
+  uhaptics::Vec3 handToDevice(const uhaptics::Vec2& a_handPoint) const noexcept;
 
  protected:
   virtual void startBackend();
@@ -69,6 +75,7 @@ class cExoFingerDevice : public cUhapticsDevice {
   double m_couplingStiffness;                       // Z_x (scalar), N m/rad
   uhaptics::Vec2 m_centre = uhaptics::Vec2::Zero();  // fingertip workspace centre, hand frame
   Model::ActuatorVector m_actuator = Model::ActuatorVector::Zero();
+  uhaptics::Vec2 m_fingerTorqueCommand = uhaptics::Vec2::Zero();  // setFingerJointTorque()
 };
 
 }  // namespace chai3d

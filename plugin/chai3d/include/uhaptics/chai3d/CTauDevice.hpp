@@ -48,6 +48,12 @@ class cTauDevice : public cUhapticsDevice {
   bool isLqrWallEngaged();
   double getLqrPenetration();
   const uhaptics::TauModel& getModel() const { return *m_model; }
+  /// The surface from an application that knows its geometry (cAlgorithmLqrWall): a point on it and
+  /// its outward unit normal, device frame [m]. While set it replaces the surface read from the
+  /// force, and an active surface is rendered by the LQR wall whatever the wall mode;
+  /// clearContactSurface() hands back to the force-read surface. Non-finite input: inactive.
+  void setContactSurface(bool a_active, const cVector3d& a_point, const cVector3d& a_normal);
+  void clearContactSurface();
 
  protected:
   virtual void startBackend();
@@ -75,6 +81,8 @@ class cTauDevice : public cUhapticsDevice {
   double m_onsetForce = 0.0;
   uhaptics::SurfaceContact m_surface;
   uhaptics::Vec6 m_tau = uhaptics::Vec6::Zero();
+  bool m_explicitSurface = false;       // setContactSurface() in force
+  uhaptics::SurfaceContact m_explicit;  // its surface, model frame
 };
 
 }  // namespace chai3d

@@ -1,0 +1,198 @@
+// cExoFingerTool (multi-point finger) on cExoFingerDevice's simulated backend, no graphics.
+#include <catch2/catch.hpp>
+#include <cmath>
+
+#include "chai3d.h"
+#include "uhaptics/chai3d/CExoFingerTool.hpp"
+#include "uhaptics/core/finite_difference.hpp"
+#include "uhaptics/core/passivity_observer.hpp"
+#include "uhaptics/tools/alloc_probe.hpp"
+
+using namespace chai3d;
+
+namespace {
+
+constexpr double kPointRadius = 0.001;  // m
+
+uhaptics::DeviceSelection exoSelection(bool hand) {
+  uhaptics::DeviceSelection s;
+  s.device = "exo";
+  s.hand_enabled = hand;  // off: the finger rests at mid-range
+  s.hand.lap_time = 2.0;  // MCP period; the joint motion repeats every 4 s
+  s.options["force_loop_lag"] = 0.0;
+  return s;
+}
+
+cVector3d toChai(const uhaptics::Vec3& v) { return cVector3d(v(0), v(1), v(2)); }
+uhaptics::Vec3 toEigen(const cVector3d& v) { return uhaptics::Vec3(v(0), v(1), v(2)); }
+
+struct FingerScene {
+  cWorld world;
+  cExoFingerTool* tool = nullptr;
+  double stiffness = 0.0;
+  explicit FingerScene(const cExoFingerDevicePtr& device) {
+    tool = new cExoFingerTool(&world);
+    world.addChild(tool);
+    tool->setExoFingerDevice(device);
+    tool->setRadius(kPointRadius);
+    tool->setWorkspaceRadius(device->getSpecifications().m_workspaceRadius);  // world = device frame
+    stiffness = device->getSpecifications().m_maxLinearStiffness;
+  }
+  // brute_force: see lqr_wall_algorithm_test.cpp (CHAI3D's AABB queries allocate).
+  cMesh* addBox(const cVector3d& centre, const cMatrix3d& rotation, double sx, double sy, double sz,
+                bool brute_force = false) {
+    cMesh* box = new cMesh();
+    world.addChild(box);
+    cCreateBox(box, sx, sy, sz);
+    box->setLocalPos(centre);
+    box->setLocalRot(rotation);
+    if (brute_force) box->createBruteForceCollisionDetector();
+    else box->createAABBCollisionDetector(kPointRadius);
+    box->m_material->setStiffness(stiffness);
+    return box;
+  }
+  void tick() {
+    world.computeGlobalPositions(true);
+    tool->updateFromDevice();
+    tool->computeInteractionForces();
+    tool->applyToDevice();
+  }
+};
+
+}  // namespace
+
+TEST_CASE("exo finger tool: phalanx Jacobians match finite differences of the points",
+          "[chai3d_adapters][exo_tool]") {
+  auto device = cExoFingerDevice::create(exoSelection(false));
+  FingerScene scene(device);
+  const uhaptics::Vec2 x(0.7, 0.9);
+  for (const auto& point : cExoFingerTool::defaultPoints()) {
+    const auto fd = uhaptics::centralDifferenceJacobian([&](const uhaptics::Vec2& y) { return scene.tool->position(point, y); }, x);
+    // Central differences of sines and cosines on ~5 cm levers: truncation ~1e-9 m/rad.
+    CHECK((scene.tool->jacobian(point, x) - fd).norm() < 1e-7);
+    CHECK(scene.tool->jacobian(point, x).row(0).isZero(0.0));  // nothing out of the finger's plane
+  }
+  CHECK_THROWS_AS(cExoFingerTool(&scene.world, {{cExoFingerTool::C_PHALANX_MIDDLE, 1.5}}), uhaptics::Error);
+  CHECK_THROWS_AS(cExoFingerTool(&scene.world, {}), uhaptics::Error);
+}
+
+// A block beside one phalanx (on its dorsal side, away from the other phalanx); the hand (the tool
+// frame) moves the resting finger into it. Only that phalanx's points may feel a force.
+TEST_CASE("exo finger tool: a box pressed on one phalanx loads only that phalanx",
+          "[chai3d_adapters][exo_tool]") {
+  for (const auto phalanx : {cExoFingerTool::C_PHALANX_PROXIMAL, cExoFingerTool::C_PHALANX_MIDDLE}) {
+    DYNAMIC_SECTION("phalanx " << phalanx) {
+      auto device = cExoFingerDevice::create(exoSelection(false));
+      device->setLockStep(true);
+      FingerScene scene(device);
+      const uhaptics::Vec2 x = 0.5 * (device->getModel().taskLower() + device->getModel().taskUpper());
+      const cExoFingerTool::cPhalanxPoint from{phalanx, 0.0}, to{phalanx, 1.0}, mid{phalanx, 0.5};
+      const uhaptics::Vec3 along = (scene.tool->position(to, x) - scene.tool->position(from, x)).normalized();
+      // Dorsal normal of the phalanx: opposite to the way flexion of its own joint moves it. The
+      // other phalanx lies on its palmar side (the finger is flexed), so it cannot reach the block.
+      const uhaptics::Vec3 out = -scene.tool->jacobian(mid, x).col(phalanx).normalized();
+      const double length = (scene.tool->position(to, x) - scene.tool->position(from, x)).norm();
+      const double gap = 0.002, thickness = 0.01;
+      cMatrix3d R;
+      R.setCol0(cVector3d(1, 0, 0));
+      R.setCol1(toChai(along));
+      R.setCol2(toChai(out));
+      // Face half the phalanx long, centred on it: covers the points at 1/3 and 2/3, not the joints.
+      scene.addBox(toChai(scene.tool->position(mid, x) + (gap + kPointRadius + 0.5 * thickness) * out), R, 0.03,
+                   0.5 * length, thickness);
+      REQUIRE(scene.tool->start());
+      for (int i = 0; i < 10; ++i) scene.tick();
+      REQUIRE(scene.tool->getFingerAngles().isApprox(x, 1e-9));
+      // Move the hand 5 mm along the outward normal over 0.5 s (the box is 2 mm away), then hold.
+      const int steps = 250;
+      for (int i = 0; i <= steps + 50; ++i) {
+        scene.tool->setLocalPos(toChai(std::min(i, steps) * (0.005 / steps) * out));
+        scene.tick();
+      }
+      const double depth = 0.003;  // 5 mm travel - 2 mm gap
+      uhaptics::Vec2 expected = uhaptics::Vec2::Zero();
+      int touching = 0;
+      for (int i = 0; i < 6; ++i) {
+        const auto& point = scene.tool->getPhalanxPoint(i);
+        const cVector3d f = scene.tool->getPointGlobalForce(i);
+        INFO("point " << i << " phalanx " << point.m_phalanx << " fraction " << point.m_fraction << " force "
+                      << f.str(4));
+        const bool on_face = point.m_phalanx == phalanx && point.m_fraction > 0.2 && point.m_fraction < 0.8;
+        if (!on_face) {
+          CHECK(f.length() == 0.0);  // exactly: its proxy never met a surface
+          continue;
+        }
+        ++touching;
+        // The block pushes back along -out with CHAI3D's proxy spring: k * depth.
+        CHECK(f.length() == Approx(scene.stiffness * depth).epsilon(0.05));
+        CHECK(toEigen(f).normalized().dot(-out) > 0.999);
+        expected += scene.tool->jacobian(point, x).transpose() * toEigen(f);
+      }
+      CHECK(touching == 2);
+      const uhaptics::Vec2 tau = scene.tool->getFingerJointTorque();
+      INFO("joint torque " << tau.transpose());
+      CHECK((tau - expected).norm() <= 1e-12 * expected.norm());
+      if (phalanx == cExoFingerTool::C_PHALANX_PROXIMAL) {
+        CHECK(tau(1) == 0.0);  // the proximal phalanx cannot load the PIP joint
+        CHECK(std::abs(tau(0)) > 1e-3);
+      } else {
+        CHECK(std::abs(tau(1)) > 1e-3);
+      }
+      // The device rendered it through the subspace proxy: a nonzero, bounded actuator force.
+      CHECK(std::abs(device->getActuatorForce()) > 0.01);
+      CHECK(std::abs(device->getActuatorForce()) <= device->getModel().forceLimit()(0));
+      CHECK(device->getLastFault() == uhaptics::Fault::kNone);
+    }
+  }
+}
+
+TEST_CASE("exo finger tool: pressing into a block and releasing is passive", "[chai3d_adapters][exo_tool]") {
+  auto device = cExoFingerDevice::create(exoSelection(true));
+  device->setLockStep(true);
+  FingerScene scene(device);
+  const double r = device->getSpecifications().m_workspaceRadius;
+  // A stiff block under the workspace centre: during flexion the middle phalanx and the fingertip dip into it.
+  scene.addBox(cVector3d(0, 0, -1.2 * r), cIdentity3d(), 4 * r, 4 * r, 2 * r);
+  REQUIRE(scene.tool->start());
+  uhaptics::PassivityObserver<2> port;
+  double stored = 0.0, peak_torque = 0.0;
+  int contact_frames = 0;
+  for (int i = 0; i < 4000; ++i) {  // two full cycles of the finger's joint motion
+    scene.tick();
+    port.update(device->getFingerAngles(), device->getFingerTorque());
+    double energy = 0.0;  // what the points' proxy springs hold now: sum |F_i|^2 / (2 k)
+    for (int p = 0; p < 6; ++p) energy += scene.tool->getPointGlobalForce(p).lengthsq() / (2.0 * scene.stiffness);
+    stored = std::max(stored, energy);
+    peak_torque = std::max(peak_torque, scene.tool->getFingerJointTorque().norm());
+    contact_frames += scene.tool->getFingerJointTorque().isZero(0.0) ? 0 : 1;
+  }
+  INFO("energy out " << port.energyOut() << " J, peak stored " << stored << " J, contact frames " << contact_frames);
+  CHECK(contact_frames > 200);  // the finger spent a real part of the cycle in the block
+  CHECK(peak_torque > 1e-3);
+  CHECK(device->getSessionStats().faults == 0);
+  // Passive over whole cycles (as for the stock cursor, exo_device_test): a command held over one
+  // 2 ms period lags 1 ms, and a spring rendered with lag tau on a cycle of frequency w returns at
+  // most 2 pi w tau of its peak energy per cycle (0.6 % at w = 2 pi / 4 s); allow twice that.
+  CHECK(port.energyOut() <= 0.012 * 2.0 * stored);
+}
+
+TEST_CASE("exo finger tool: a haptic frame allocates nothing", "[chai3d_adapters][exo_tool]") {
+  auto device = cExoFingerDevice::create(exoSelection(true));
+  device->setLockStep(true);
+  FingerScene scene(device);
+  const double r = device->getSpecifications().m_workspaceRadius;
+  scene.addBox(cVector3d(0, 0, -1.2 * r), cIdentity3d(), 4 * r, 4 * r, 2 * r, true);
+  REQUIRE(scene.tool->start());
+  for (int i = 0; i < 2000; ++i) scene.tick();  // one full lap: every contact configuration seen once
+  uhaptics::tools::AllocationScope scope;
+  int contact_frames = 0;
+  for (int i = 0; i < 2000; ++i) {
+    scene.tool->updateFromDevice();
+    scene.tool->computeInteractionForces();
+    scene.tool->applyToDevice();
+    contact_frames += scene.tool->getFingerJointTorque().isZero(0.0) ? 0 : 1;
+  }
+  const std::uint64_t allocations = scope.count();  // before any assertion (Catch may allocate)
+  CHECK(contact_frames > 100);  // the count covers contact frames, not only free space
+  CHECK(allocations == 0);
+}
