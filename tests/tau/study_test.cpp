@@ -21,12 +21,12 @@ const LqrWallGains& gains() {
 }  // namespace
 
 TEST_CASE("Study, reduced grid: LQR penetration < 1 mm and K_zs an order above the spring wall") {
-  // The four corners of the wall (where the static torque peaks) and its centre, 2 seeds, both
-  // scenarios; uhaptics-tau-study covers the whole 11 x 11 grid.
+  // The four corners of the wall (where the static torque peaks) and its centre, one seed each,
+  // both scenarios (20 runs of 3 s, ~1 s CPU); uhaptics-tau-study covers the whole 11 x 11 grid.
   double lqr_pen = 0.0, lqr_kzs_min = 1e300, spring_kzs_max = 0.0;
   const double c = model().workspaceHalfSide();
   for (const auto& [x, y] : {std::pair{-c, -c}, std::pair{-c, c}, std::pair{c, -c}, std::pair{c, c}, std::pair{0.0, 0.0}})
-      for (std::uint64_t seed : {11u, 12u})
+      for (std::uint64_t seed : {11u})
         for (Scenario sc : {Scenario::kStepForce, Scenario::kHand}) {
           RunSpec spec;
           spec.x = x;
