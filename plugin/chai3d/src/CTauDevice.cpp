@@ -99,6 +99,10 @@ void cTauDevice::startBackend() {
   if (m_selection.backend != "sim") throw uhaptics::Error("TAU has no '" + m_selection.backend + "' backend");
   uhaptics::SimulatedTauOptions options;
   options.tool_damping = m_toolDamping;
+  // The handle's rotational damping (the baseline device's 0.01 N m s/rad, as in tau-study): CHAI3D
+  // tools command no torque and the scripted hand holds no orientation, so without it the
+  // long-rod platform drifts in orientation under a push until a leg leaves its range.
+  options.tool_rotational_damping = m_selection.option("tool_rotational_damping", 0.01, 0.0, 1.0);
   m_sim = std::make_unique<uhaptics::SimulatedTau>(*m_model, options);
   m_sim->reset(m_model->homeJoints());
   m_sim->detachHand();  // the scripted hand's force arrives as the external force
@@ -147,8 +151,10 @@ void cTauDevice::updateContact(const uhaptics::Vec3& a_force) noexcept {
       break;
     }
     case Contact::kLqr:
-      // Released by the wall itself once it held the tool (see servoTick); a surface latched but
-      // never reached (the tool withdrew first) is dropped when the force is gone.
+      // The surface stays latched while the application still feels it: a stiff wall holds the tool
+      // right at the surface, where the wall's own contact test flickers, and dropping the surface
+      // there would re-probe and latch a deeper one. It is dropped once the tool is off the surface
+      // (the wall not holding it) and the proxy's force is gone.
       if (!m_lqrEngaged.load() && magnitude < 0.5 * m_contactForce) {
         m_contact = Contact::kFree;
         m_surface.active = false;
@@ -175,10 +181,6 @@ uhaptics::Fault cTauDevice::servoTick(const ServoInput& a_input, double& a_outpu
     const uhaptics::WallCommand& wall = m_lqr->tick(q, m_surface, &m_data->pose);
     fault = wall.fault;
     m_tau = wall.torque;
-    if (m_contact == Contact::kLqr && !wall.in_contact && m_surface.active && m_lqrEngaged.load()) {
-      m_contact = Contact::kFree;  // the tool left the surface: the wall released it
-      m_surface.active = false;
-    }
     m_lqrEngaged = m_contact == Contact::kLqr && wall.in_contact;
     if (!m_lqrEngaged.load()) {
       uhaptics::Vec6 wrench;

@@ -32,7 +32,8 @@ class cTauDevice : public cUhapticsDevice {
   enum cWallMode { C_TAU_WALL_AUTO = 0, C_TAU_WALL_SPRING = 1, C_TAU_WALL_LQR = 2 };
 
   /// Options ("options/tau/..."): wall 0 auto / 1 spring / 2 LQR; stiff_threshold [N/m], default 3000;
-  /// contact_force [N] where a contact starts, default 0.3; tool_damping [N s/m], default 0.
+  /// contact_force [N] where a contact starts, default 0.3; tool_damping [N s/m], default 0;
+  /// tool_rotational_damping [N m s/rad], default 0.01 (simulated handle).
   cTauDevice(unsigned int a_deviceNumber, const uhaptics::DeviceSelection& a_selection);
   virtual ~cTauDevice();
   static cTauDevicePtr create(const uhaptics::DeviceSelection& a_selection, unsigned int a_deviceNumber = 0) {
