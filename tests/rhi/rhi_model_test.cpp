@@ -141,4 +141,21 @@ TEST_CASE("malformed RHI parameter files are rejected with a clear error") {
   p = rhi4().parameters();
   p.torque_limit(0) = 0.0;
   CHECK_THROWS_AS(Rhi4Model(p), Error);
+  p = rhi4().parameters();
+  p.joint_limits.lower(1) = p.joint_limits.upper(1);
+  CHECK_THROWS_WITH(Rhi4Model(p), Catch::Contains("joint limits"));
+  p = rhi4().parameters();
+  p.joint_limits.lower(0) = 0.1;  // home q1 = 0 below it
+  CHECK_THROWS_WITH(Rhi4Model(p), Catch::Contains("home"));
+}
+
+TEST_CASE("RHI joint limits: parallelogram internal angles in [30, 150] deg, motors within 90 deg of home") {
+  const auto& l = rhi4().jointLimits();
+  REQUIRE(l.any());
+  CHECK(l.distance(rhi4().home()) == Approx(M_PI / 3));  // both internal angles at 90 deg, 60 deg from a stop
+  // Links 1 and 2 folded flat (q1 - q2 + 90 deg = 0) or links 3 and 4 stretched straight are outside.
+  CHECK_FALSE(l.contains(Vec<4>(0.0, M_PI / 2, 0.0, 0.0)));
+  CHECK_FALSE(l.contains(Vec<4>(0.0, 0.0, 0.0, M_PI / 2)));
+  // The planar3 example has no stops.
+  CHECK_FALSE(rhi::loadPlanar3(UHAPTICS_PARAMS_DIR).jointLimits().any());
 }

@@ -39,15 +39,18 @@ def main(folder, out):
     ident = read(os.path.join(folder, "identification.csv"))
     for name, color in (("free", "tab:red"), ("stiff", "tab:purple")):
         r = table[name]
-        m, phi, c = float(r["inertia_identified_kg"]), float(r["friction_identified_Ns_per_m"]), float(r["coulomb_identified_N"])
+        m, phi = float(r["inertia_identified_kg"]), float(r["friction_identified_Ns_per_m"])
         pts = [x for x in ident if x["ellipsoid"] == name]
-        meas = [float(x["push_force"]) for x in pts]
-        fit = [m * float(x["a_u"]) + phi * float(x["v_u"]) + c for x in pts]
-        axes[2].plot(meas, fit, ".", color=color, ms=3,
-                     label=f"{name}: M_x {m:.3f} kg (model {float(r['inertia_model_kg']):.3f}), F_max {float(r['peak_force_N']):.2f} N")
-    axes[2].plot([0.5, 1.5], [0.5, 1.5], "k:", lw=0.8)
-    axes[2].set_xlabel("applied force [N]")
-    axes[2].set_ylabel("M_x a + Phi v + F_c [N]")
+        meas = [float(x["force_u"]) for x in pts]
+        fit = [float(x["fitted_force_u"]) for x in pts]
+        axes[2].plot(meas, fit, ".", color=color, ms=2,
+                     label=f"{name}: M_x {m:.3f} kg (model {float(r['inertia_model_kg']):.3f}), "
+                           f"Phi {phi:.2f} N s/m, F_max {float(r['peak_force_N']):.2f} N")
+    lo = min([float(x["force_u"]) for x in ident] + [-1.0])
+    hi = max([float(x["force_u"]) for x in ident] + [1.0])
+    axes[2].plot([lo, hi], [lo, hi], "k:", lw=0.8)
+    axes[2].set_xlabel("measured force along u [N]")
+    axes[2].set_ylabel("M_x a + Phi v + F_c sign(v) [N]")
     axes[2].set_title("identification fit")
     axes[2].legend(fontsize=7)
     fig.tight_layout()

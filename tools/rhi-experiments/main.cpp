@@ -126,54 +126,66 @@ int main(int argc, char** argv) {
       CsvWriter t(out + "/palpation_table.csv",
                   {"ellipsoid", "q1", "q2", "q3", "q4", "capability_N", "peak_force_N", "inertia_model_kg",
                    "inertia_identified_kg", "friction_model_Ns_per_m", "friction_identified_Ns_per_m",
-                   "coulomb_identified_N", "fit_rms_N"});
+                   "coulomb_model_N", "coulomb_identified_N", "fit_rms_N", "limit_distance_rad"});
       for (const auto* c : {&free_case, &stiff_case})
         t.row(c->name, {c->q_settled(0), c->q_settled(1), c->q_settled(2), c->q_settled(3), c->capability,
                         c->peak_force, c->inertia_model, c->inertia_identified, c->friction_model,
-                        c->friction_identified,
-                        c->coulomb_identified, c->fit_rms});
+                        c->friction_identified, c->coulomb_model, c->coulomb_identified, c->fit_rms,
+                        c->limit_distance});
       writeLoop(free_case.push, out + "/palpation_free.csv", 5);
       writeLoop(stiff_case.push, out + "/palpation_stiff.csv", 5);
-      CsvWriter id(out + "/identification.csv", {"ellipsoid", "trial", "push_force", "x_u", "v_u", "a_u"});
+      CsvWriter id(out + "/identification.csv",
+                   {"ellipsoid", "trial", "amplitude_N", "x_u", "v_u", "a_u", "force_u", "fitted_force_u"});
       for (const auto* c : {&free_case, &stiff_case})
         for (std::size_t i = 0; i < c->trials.size(); ++i)
-          for (const auto& s : c->trials[i].samples)
-            id.row(c->name, {static_cast<double>(i), c->trials[i].push_force, s[0], s[1], s[2]});
+          for (std::size_t k = 0; k < c->trials[i].samples.size(); k += 2) {
+            const auto& s = c->trials[i].samples[k];
+            const double fitted = c->inertia_identified * s[2] + c->friction_identified * s[1] +
+                                  (s[1] > 0 ? 1.0 : -1.0) * c->coulomb_identified;
+            id.row(c->name, {static_cast<double>(i), c->trials[i].push_force, s[0], s[1], s[2], s[3], fitted});
+          }
     }
     const double gain = stiff_case.peak_force / free_case.peak_force - 1.0;
     summary << "Palpation at X0 = [0.5, 0.1] m along u = [0, 1], K_e = 1000 N/m:\n";
     for (const auto* c : {&free_case, &stiff_case})
       summary << "  " << std::setw(5) << c->name << " ellipsoid: q = [" << c->q_settled.transpose()
-              << "], capability " << c->capability << " N, peak rendered force " << c->peak_force
-              << " N, inertia along u " << c->inertia_identified << " kg identified (" << c->inertia_model
-              << " kg model), viscous " << c->friction_identified << " N s/m identified ("
-              << c->friction_model << " N s/m reflected joint viscous friction) + Coulomb " << c->coulomb_identified
-              << " N (fit rms " << c->fit_rms << " N)\n";
+              << "], closest to a joint limit " << c->limit_distance << " rad, capability " << c->capability << " N, peak rendered force " << c->peak_force
+              << " N\n      identified along u: inertia " << c->inertia_identified << " kg (model "
+              << c->inertia_model << "), viscous " << c->friction_identified << " N s/m (reflected joint viscous "
+              << c->friction_model << "), Coulomb " << c->coulomb_identified << " N (reflected "
+              << c->coulomb_model << "), fit rms " << c->fit_rms << " N\n";
     summary << "  force capability gain stiff vs free: " << 100.0 * gain << " % (paper: +51 %)\n";
-    // Forces depend on the kinematics and on the self-motion minimum the controller settles in; the
-    // paper's real device also had joint limits we do not know, so 25 % is allowed per force.
+    // The maximum force follows from the kinematics, the torque limits and the configuration the
+    // controller settles in: 15 % of the paper's values allows for the unpublished base frame and joint
+    // limits on an otherwise exact kinematic model (README: why the stiff case still misses it).
     table.addWithin("003", "Table I: max force along u, free ellipsoid", 5.674, free_case.peak_force,
-                    0.25 * 5.674, "N");
+                    0.15 * 5.674, "N");
     table.addWithin("003", "Table I: max force along u, stiff ellipsoid", 8.564, stiff_case.peak_force,
-                    0.25 * 8.564, "N");
-    table.addBound("003", "Table I: stiff ellipsoid stronger along u than free", 100.0 * gain,
-                   "gain > 0 (paper +51 %)", gain > 0.0, "%");
-    // Inertia depends on the assumed link masses: only the ordering carries over.
+                    0.15 * 8.564, "N");
+    table.addWithin("003", "Table I: force capability gain stiff vs free", 51.0, 100.0 * gain, 15.0, "%");
+    table.addBound("003", "palpation stays within the (assumed) joint limits",
+                   std::min(free_case.limit_distance, stiff_case.limit_distance), "closest approach > 0",
+                   std::min(free_case.limit_distance, stiff_case.limit_distance) > 0.0, "rad");
+    // Inertia and friction depend on the assumed masses and friction: the paper's ordering carries
+    // over, the values are compared in the README only. The identifier itself is judged against the
+    // model's own values at the same configuration.
     table.addBound("003", "Table I: apparent inertia free < stiff (paper 0.036 < 0.125 kg)",
                    stiff_case.inertia_identified / free_case.inertia_identified, "ratio stiff/free > 1",
                    stiff_case.inertia_identified > free_case.inertia_identified, "");
-    table.addBound("003", "identified inertia matches model u^T Lambda u (free)", free_case.inertia_identified,
-                   "within 15 % of the model", std::abs(free_case.inertia_identified / free_case.inertia_model - 1) < 0.15,
-                   "kg");
-    table.addBound("003", "identified inertia matches model u^T Lambda u (stiff)", stiff_case.inertia_identified,
-                   "within 15 % of the model",
-                   std::abs(stiff_case.inertia_identified / stiff_case.inertia_model - 1) < 0.15, "kg");
-    // Friction is assumed too; the reflected joint viscous friction u^T J#^T B J# u carries the
-    // ordering. (The least-squares viscous term is reported but not judged: in simulation the
-    // null-space reconfiguration during a push couples through joint friction into the fit.)
-    table.addBound("003", "Table I: back-drive friction free < stiff (paper 0.295 < 0.633 N s/m)",
-                   stiff_case.friction_model / free_case.friction_model, "reflected viscous ratio stiff/free > 1",
-                   stiff_case.friction_model > free_case.friction_model, "");
+    table.addBound("003", "Table I: back-drive viscous friction free < stiff (paper 0.295 < 0.633 N s/m)",
+                   stiff_case.friction_identified / free_case.friction_identified, "identified ratio stiff/free > 1",
+                   free_case.friction_identified > 0.0 && stiff_case.friction_identified > free_case.friction_identified,
+                   "");
+    for (const auto* c : {&free_case, &stiff_case}) {
+      // 15 %: the fit sees the arm's configuration change over +-2 cm and the null-space motion,
+      // which the single-configuration model values leave out.
+      table.addBound("003", "identified inertia matches model u^T Lambda u (" + c->name + ")", c->inertia_identified,
+                     "within 15 % of " + std::to_string(c->inertia_model),
+                     c->fit_valid && std::abs(c->inertia_identified / c->inertia_model - 1) < 0.15, "kg");
+      table.addBound("003", "identified viscous friction matches reflected joint friction (" + c->name + ")",
+                     c->friction_identified, "within 25 % of " + std::to_string(c->friction_model),
+                     c->fit_valid && std::abs(c->friction_identified / c->friction_model - 1) < 0.25, "N s/m");
+    }
     tools::runPlotScript("rhi_palpation.py", {out, out + "/palpation.png"});
 
     // Workspace map.
@@ -208,7 +220,10 @@ int main(int argc, char** argv) {
             << " s): largest null-space command step per tick " << smooth.max_null_torque_jump
             << " N m with smoothing (t = " << smooth.jump_time << " s), " << abrupt.max_null_torque_jump
             << " N m without (t = " << abrupt.jump_time << " s); applied null-space torque (after the limit scaling): "
-            << smooth.max_applied_null_jump << " vs " << abrupt.max_applied_null_jump << " N m\n";
+            << smooth.max_applied_null_jump << " vs " << abrupt.max_applied_null_jump
+            << " N m; joint-limit avoidance command step " << smooth.max_limit_torque_jump << " vs "
+            << abrupt.max_limit_torque_jump << " N m, closest approach to a joint limit " << smooth.limit_distance
+            << " vs " << abrupt.limit_distance << " rad\n";
     table.addWithin("003", "Fig. 11: transition duration rho |M_free - M_stiff|_F", 0.5,
                     smooth.transition_duration, 0.05, "s");
     table.addBound("003", "Fig. 11: null-space torque jump, smoothed vs abrupt switch",

@@ -4,10 +4,13 @@
 #include <cmath>
 #include <limits>
 
+#include "uhaptics/core/mass_friction_fit.hpp"
 #include "uhaptics/core/self_motion.hpp"
 #include "uhaptics/tools/parallel.hpp"
 
 namespace uhaptics::rhi {
+
+static_assert(kHasJointLimits<Rhi4Model>, "the RHI controller must see the model's joint limits");
 
 namespace {
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
@@ -17,6 +20,24 @@ Rhi4Controller::Options paperOptions(FmeEllipsoidMode mode, const Vec2& u) {
   o.mode = mode;
   o.motion_direction = u;
   return o;
+}
+
+// Offline matching descends the same potential as the controller: nu + (k_L / beta) P.
+fme::SelfMotionOptions matchingOptions() {
+  const Rhi4Controller::Options c;
+  fme::SelfMotionOptions o;
+  o.max_iterations = 1500;
+  o.limit_weight = c.limit_gain / c.beta;
+  o.limit_margin = c.limit_margin;
+  return o;
+}
+
+// Starts for the offline matching: home and the four configurations that turn the first motor or
+// the PHANTOM mount by +-45 deg with both internal angles kept at 90 deg (all inside the limits).
+std::array<Vec4, 5> limitSeeds(const Rhi4Model& model) {
+  const Vec4 h = model.home();
+  const double a = M_PI / 4;
+  return {h, h + Vec4(a, a, 0, 0), h + Vec4(-a, -a, 0, 0), h + Vec4(0, 0, a, a), h + Vec4(0, 0, -a, -a)};
 }
 }  // namespace
 
@@ -34,6 +55,25 @@ Vec<N> inverseKinematics(const PlanarLinkageModel<N>& model, const Vec<N>& q_sta
 }
 template Vec<3> inverseKinematics<3>(const PlanarLinkageModel<3>&, const Vec<3>&, const Vec2&);
 template Vec<4> inverseKinematics<4>(const PlanarLinkageModel<4>&, const Vec<4>&, const Vec2&);
+
+bool matchedConfiguration(const Rhi4Model& model, const Vec2& x, const Mat2& target, Vec4& q_best) {
+  const fme::SelfMotionOptions opt = matchingOptions();
+  const JointLimits<4>& joint_limits = model.jointLimits();
+  const Vec4 w2 = fme::inverseSquaredLimits(model.torqueLimits());
+  double best = kNaN;
+  for (const Vec4& seed : limitSeeds(model)) {
+    Vec4 q = seed;
+    if (fme::projectOnto(model, q, x) > 1e-9) continue;
+    const auto r = fme::optimizeSelfMotion(model, q, x, w2, target, opt, &joint_limits);
+    if (!r.valid || r.position_error > 1e-9 || !joint_limits.contains(q)) continue;
+    const double total = r.nu + opt.limit_weight * r.limit_potential;
+    if (!(total >= best)) {  // also true while best is NaN
+      best = total;
+      q_best = q;
+    }
+  }
+  return std::isfinite(best);
+}
 
 // ---- 3-DoF example ---------------------------------------------------------------------------
 ExampleResult runExample3(const Planar3Model& model, double duration, double dt) {
@@ -116,16 +156,29 @@ void ClosedLoop::tick(const EndEffectorLoad& load, bool wall_on) {
 LoopSample ClosedLoop::sample() const {
   const auto& st = ctrl_.status();
   return {t_, sim_.endEffectorPosition(), st.force, force_.norm(), tau_, st.tau_null, st.tau_null_command,
-          st.observer, st.omega, st.cost, st.alpha};
+          st.tau_limit_command, sim_.model().jointLimits().distance(sim_.position()), st.observer, st.omega, st.cost,
+          st.alpha};
 }
 
 namespace {
+// The device arrives at x_start under the controller under test: it starts from the match of that
+// controller's ellipsoid there (the stiff one for case B, eps = 1; the free one otherwise), within
+// the joint limits, and settles for settle_time.
 ClosedLoop settledLoop(const Rhi4Model& model, const Rhi4Controller::Options& options, const PalpationSetup& setup,
-                       const Vec4& q_guess, const Vec2& x_start, double settle_time) {
+                       const Vec2& x_start, double settle_time, double* limit_distance = nullptr) {
   ClosedLoop loop(model, options, setup);
-  loop.device().reset(inverseKinematics(model, q_guess, x_start));
+  Vec4 q_start;
+  const auto& ctrl = loop.controller();
+  const Mat2& target = options.mode == FmeEllipsoidMode::kStiff ? ctrl.stiffEllipsoid() : ctrl.freeEllipsoid();
+  if (!matchedConfiguration(model, x_start, target, q_start))
+    throw Error("palpation: no configuration within the joint limits reaches the start point");
+  loop.device().reset(q_start);
   const long n = std::lround(settle_time / setup.servo_dt);
-  for (long k = 0; k < n; ++k) loop.tick(x_start, false);
+  for (long k = 0; k < n; ++k) {
+    loop.tick(x_start, false);
+    if (limit_distance)
+      *limit_distance = std::min(*limit_distance, model.jointLimits().distance(loop.device().position()));
+  }
   return loop;
 }
 }  // namespace
@@ -137,7 +190,9 @@ PalpationCase runPalpation(const Rhi4Model& model, FmeEllipsoidMode mode, const 
   const Vec4 limits = model.torqueLimits();
 
   // 1. Reconfigure at x0, then push into the wall with the hand: anchor ramps 3 cm along u.
-  ClosedLoop loop = settledLoop(model, options, setup, model.home(), setup.x0, setup.settle_time);
+  pc.limit_distance = INFINITY;
+  ClosedLoop loop = settledLoop(model, options, setup, setup.x0, setup.settle_time,
+                                &pc.limit_distance);
   pc.q_settled = loop.device().position();
   Mat<2, 4> J;
   model.jacobian(pc.q_settled, J);
@@ -148,77 +203,66 @@ PalpationCase runPalpation(const Rhi4Model& model, FmeEllipsoidMode mode, const 
     loop.tick(setup.x0 + 0.03 * s * setup.u, true);
     const LoopSample smp = loop.sample();
     pc.peak_force = std::max(pc.peak_force, std::abs(smp.force.dot(setup.u)));
+    pc.limit_distance = std::min(pc.limit_distance, model.jointLimits().distance(loop.device().position()));
     pc.push.push_back(smp);
   }
 
-  // 2. Identification (paper Sec. IV): start 5 cm before x0, push with a constant force of 0.5-1.5 N
-  // along u on a guide (stiff across u), regress F = M_x a + Phi v on the samples near x0.
-  const Vec2 start = setup.x0 - 0.05 * setup.u;
+  // 2. Identification of M_x and the back-drive friction along u at x0 (paper Sec. IV, eq. 22 plus
+  // a Coulomb term). The paper pushes with constant forces; in a noise-free simulation with joint
+  // friction this small the velocity column of such pushes is nearly collinear with the bias and
+  // whatever the model leaves out (configuration change, null-space motion) lands in Phi. A known
+  // multi-sine force (0.5-1.5 N amplitude per trial, the paper's force range) about x0 on a guide
+  // (stiff across u, a soft centring spring along u so the arm oscillates about x0 instead of
+  // drifting) excites a, v and sign(v) independently. F is the measured external force along u
+  // (excitation + guide, the force sensor's reading), samples within 2 cm of x0.
   const Mat2 across = Mat2::Identity() - setup.u * setup.u.transpose();
-  // Regressors [a, v, 1]: the paper fits M_x and a viscous Phi; joint Coulomb friction reflects as
-  // a constant force during a push in one direction, fitted here as a third term so it does not
-  // bias the other two.
-  Eigen::Matrix3d normal = Eigen::Matrix3d::Zero();
-  Eigen::Vector3d rhs = Eigen::Vector3d::Zero();
-  double inertia_sum = 0.0, friction_sum = 0.0;
-  int inertia_count = 0;
+  std::vector<MotionForceSample> data;
+  ClosedLoop id = settledLoop(model, options, setup, setup.x0, setup.settle_time);
+  EndEffectorLoad guide;
+  guide.anchor = setup.x0;
+  guide.stiffness = 5000.0 * across + 100.0 * setup.u * setup.u.transpose();
+  guide.damping = 50.0 * across + 1.0 * setup.u * setup.u.transpose();
   for (int i = 0; i < trials; ++i) {
     IdentificationTrial trial;
     trial.push_force = trials > 1 ? 0.5 + static_cast<double>(i) / (trials - 1) : 1.0;
-    ClosedLoop id = settledLoop(model, options, setup, pc.q_settled, start, 1.5);
-    EndEffectorLoad guide;
-    guide.bias = trial.push_force * setup.u;
-    guide.anchor = start;
-    guide.stiffness = 5000.0 * across;
-    guide.damping = 50.0 * across;
-    bool crossed = false;
+    guide.bias.setZero();  // let the previous trial die out
+    for (int k = 0; k < 300; ++k) id.tick(guide, false);
     const double t0 = id.time();
-    while (id.time() < t0 + 3.0) {
+    while (id.time() < t0 + 2.0) {
+      const double t = id.time() - t0;
+      guide.bias = trial.push_force * (std::sin(2 * M_PI * 1.7 * t) + 0.5 * std::sin(2 * M_PI * 4.3 * t + 1.0)) *
+                   setup.u;
       id.tick(guide, false);
       const auto& dev = id.device();
       const double xu = (dev.endEffectorPosition() - setup.x0).dot(setup.u);
-      if (std::abs(xu) <= 0.02) {
-        trial.samples.push_back({xu, dev.endEffectorVelocity().dot(setup.u),
-                                 dev.endEffectorAcceleration().dot(setup.u), trial.push_force});
-      }
-      if (!crossed && xu >= 0.0) {
-        crossed = true;
-        Mat<4, 4> Mq;
-        Mat<2, 4> Jx;
-        model.massMatrix(dev.position(), Mq);
-        model.jacobian(dev.position(), Jx);
-        const Mat<4, 2> MinvJt = Mq.llt().solve(Jx.transpose());
-        const Mat2 lambda = (Jx * MinvJt).inverse();
-        const Mat<4, 2> Jsharp = MinvJt * lambda;
-        inertia_sum += setup.u.dot(lambda * setup.u);
-        friction_sum += setup.u.dot(Jsharp.transpose() * model.parameters().viscous_friction.asDiagonal() * Jsharp *
-                                    setup.u);
-        ++inertia_count;
-      }
-      if (xu > 0.025) break;
-    }
-    for (const auto& s : trial.samples) {
-      const Eigen::Vector3d row(s[2], s[1], 1.0);
-      normal += row * row.transpose();
-      rhs += row * s[3];
+      if (std::abs(xu) > 0.02) continue;
+      const MotionForceSample smp{dev.endEffectorAcceleration().dot(setup.u), dev.endEffectorVelocity().dot(setup.u),
+                                  dev.externalForce().dot(setup.u)};
+      trial.samples.push_back({xu, smp.velocity, smp.acceleration, smp.force});
+      data.push_back(smp);
     }
     pc.trials.push_back(std::move(trial));
   }
-  pc.inertia_model = inertia_count ? inertia_sum / inertia_count : kNaN;
-  pc.friction_model = inertia_count ? friction_sum / inertia_count : kNaN;
-  const Eigen::Vector3d theta = normal.ldlt().solve(rhs);
-  pc.inertia_identified = theta(0);
-  pc.friction_identified = theta(1);
-  pc.coulomb_identified = theta(2);
-  double sq = 0.0;
-  std::size_t n = 0;
-  for (const auto& trial : pc.trials)
-    for (const auto& s : trial.samples) {
-      const double e = s[3] - theta(0) * s[2] - theta(1) * s[1] - theta(2);
-      sq += e * e;
-      ++n;
-    }
-  pc.fit_rms = n ? std::sqrt(sq / static_cast<double>(n)) : kNaN;
+  // The model's own values at the matched configuration, for a guided motion along u: inertia
+  // u^T Lambda u, reflected joint viscous friction u^T J#^T B J# u and Coulomb sum_i c_i |(J# u)_i|.
+  {
+    Mat<4, 4> Mq;
+    model.massMatrix(pc.q_settled, Mq);
+    const Mat<4, 2> MinvJt = Mq.llt().solve(J.transpose());
+    const Mat2 lambda = (J * MinvJt).inverse();
+    const Vec4 joint_per_u = MinvJt * lambda * setup.u;  // J# u
+    pc.inertia_model = setup.u.dot(lambda * setup.u);
+    pc.friction_model = joint_per_u.dot(model.parameters().viscous_friction.cwiseProduct(joint_per_u));
+    pc.coulomb_model = model.parameters().coulomb_friction.dot(joint_per_u.cwiseAbs());
+  }
+  // 1 cm/s dead band: joint speeds of ~0.05 rad/s and more, ten times the simulated Coulomb
+  // smoothing velocity, where tanh(.) is sign(.) to 1e-8.
+  const MassFrictionFit fit = fitMassFriction(data, 1e-2);
+  pc.fit_valid = fit.valid;
+  pc.inertia_identified = fit.valid ? fit.mass : kNaN;
+  pc.friction_identified = fit.valid ? fit.viscous : kNaN;
+  pc.coulomb_identified = fit.valid ? fit.coulomb : kNaN;
+  pc.fit_rms = fit.valid ? fit.rms : kNaN;
   return pc;
 }
 
@@ -243,20 +287,16 @@ std::vector<WorkspacePoint> workspaceRatioMap(const Rhi4Model& model, double ste
   Mat2 free_fme, stiff_fme;
   fme::axisAlignedEllipsoid(u, scales.minor, scales.major, free_fme);
   fme::axisAlignedEllipsoid(u, scales.major, scales.minor, stiff_fme);
-  fme::SelfMotionOptions opt;
-  opt.max_iterations = 1500;
   tools::parallelFor(points.size(), threads, [&](std::size_t k) {
     WorkspacePoint& p = points[k];
-    Vec4 q0 = model.home();
-    if (fme::projectOnto(model, q0, p.x) > 1e-9) return;
     Mat<2, 4> Jp;
-    Vec4 q = q0;
-    if (!fme::optimizeSelfMotion(model, q, p.x, w2, free_fme, opt).valid) return;
+    Vec4 q;
+    if (!matchedConfiguration(model, p.x, free_fme, q)) return;
     model.jacobian(q, Jp);
-    p.free_force = fme::maxForceAlong(Jp, limits, u);
-    q = q0;
-    if (!fme::optimizeSelfMotion(model, q, p.x, w2, stiff_fme, opt).valid) return;
+    const double free_force = fme::maxForceAlong(Jp, limits, u);
+    if (!matchedConfiguration(model, p.x, stiff_fme, q)) return;
     model.jacobian(q, Jp);
+    p.free_force = free_force;
     p.stiff_force = fme::maxForceAlong(Jp, limits, u);
     p.ratio = p.stiff_force / p.free_force;
   });
@@ -269,14 +309,15 @@ TransitionRun runTransition(const Rhi4Model& model, bool smooth, const Palpation
   run.smooth = smooth;
   auto options = paperOptions(FmeEllipsoidMode::kAuto, setup.u);
   options.transition.smooth = smooth;
-  ClosedLoop loop = settledLoop(model, options, setup, model.home(), setup.x0, setup.settle_time);
+  ClosedLoop loop = settledLoop(model, options, setup, setup.x0, setup.settle_time);
   run.transition_duration =
       options.transition.rho * (loop.controller().freeEllipsoid() - loop.controller().stiffEllipsoid()).norm();
   // Hold, press 3 cm into the wall (the demand exceeds the free configuration's capability), hold,
   // withdraw out of contact, hold.
   const double t0 = loop.time();
-  Vec4 previous = Vec4::Zero(), previous_applied = Vec4::Zero();
+  Vec4 previous = Vec4::Zero(), previous_applied = Vec4::Zero(), previous_limit = Vec4::Zero();
   bool first = true;
+  run.limit_distance = INFINITY;
   while (loop.time() < t0 + 7.5) {
     const double t = loop.time() - t0;
     double depth = 0.0;
@@ -288,8 +329,12 @@ TransitionRun runTransition(const Rhi4Model& model, bool smooth, const Palpation
     loop.tick(setup.x0 + depth * setup.u, true);
     LoopSample s = loop.sample();
     s.t = t;
+    const Vec4 fme_command = s.tau_null_command - s.tau_limit_command;
+    run.limit_distance = std::min(run.limit_distance, s.limit_distance);
     if (!first) {
-      const double jump = (s.tau_null_command - previous).cwiseAbs().maxCoeff();
+      const double jump = (fme_command - previous).cwiseAbs().maxCoeff();
+      run.max_limit_torque_jump =
+          std::max(run.max_limit_torque_jump, (s.tau_limit_command - previous_limit).cwiseAbs().maxCoeff());
       if (jump > run.max_null_torque_jump) {
         run.max_null_torque_jump = jump;
         run.jump_time = t;
@@ -298,7 +343,8 @@ TransitionRun runTransition(const Rhi4Model& model, bool smooth, const Palpation
           std::max(run.max_applied_null_jump, (s.tau_null - previous_applied).cwiseAbs().maxCoeff());
     }
     first = false;
-    previous = s.tau_null_command;
+    previous = fme_command;
+    previous_limit = s.tau_limit_command;
     previous_applied = s.tau_null;
     run.samples.push_back(s);
   }

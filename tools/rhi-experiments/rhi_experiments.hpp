@@ -23,6 +23,11 @@ Planar3Model loadPlanar3(const std::string& params_dir);
 template <int N>
 Vec<N> inverseKinematics(const PlanarLinkageModel<N>& model, const Vec<N>& q_start, const Vec2& x);
 
+/// The configuration whose FME matches `target` at end-effector position x: the lowest
+/// nu + (k_L / beta) P over self-motion descents from a few starts, within the model's joint limits
+/// (the state the null-space controller settles in). False when no start reaches x within limits.
+bool matchedConfiguration(const Rhi4Model& model, const Vec2& x, const Mat2& target, Vec4& q);
+
 // ---- 3-DoF example (Fig. 3-4) ------------------------------------------------------------------
 struct ExampleConfiguration {
   std::string name;  // "initial", "free", "stiff"
@@ -65,7 +70,8 @@ struct LoopSample {
   Vec2 x;
   Vec2 force;       // commanded (alpha F)
   double demanded;  // |F| asked by the wall
-  Vec4 tau, tau_null, tau_null_command;
+  Vec4 tau, tau_null, tau_null_command, tau_limit_command;
+  double limit_distance;  // to the nearest joint limit [rad]
   double observer, omega, nu, alpha;
 };
 
@@ -93,20 +99,23 @@ class ClosedLoop {
 
 // ---- Table I: palpation with the free vs the stiff ellipsoid -------------------------------------
 struct IdentificationTrial {
-  double push_force;  // constant external force along u [N]
+  double push_force;  // amplitude of the multi-sine excitation along u [N]
   std::vector<std::array<double, 4>> samples;  // x_u, v_u, a_u, F_ext along u, inside the window
 };
 struct PalpationCase {
   std::string name;  // "free", "stiff"
   Vec4 q_settled;    // configuration after the reconfiguration at x0
+  double limit_distance = 0.0;  // closest approach to a joint limit, settling and push [rad] (< 0: violated)
   double capability = 0.0;  // static maximum force along u at q_settled [N]
   double peak_force = 0.0;  // largest rendered force along u during the push [N]
   double inertia_model = 0.0;  // u^T Lambda u at the identification point (guided along u) [kg]
   double friction_model = 0.0; // u^T J#^T B J# u, joint viscous friction reflected along u [N s/m]
+  double coulomb_model = 0.0;  // sum_i c_i |(J# u)_i|, joint Coulomb friction reflected along u [N]
   double inertia_identified = 0.0;  // least squares [kg]
   double friction_identified = 0.0; // viscous Phi [N s/m]
   double coulomb_identified = 0.0;  // constant (Coulomb) part of the back-drive force [N]
   double fit_rms = 0.0;             // residual of the fit [N]
+  bool fit_valid = false;
   std::vector<LoopSample> push;     // the palpation run
   std::vector<IdentificationTrial> trials;
 };
@@ -128,7 +137,9 @@ struct TransitionRun {
   bool smooth;
   std::vector<LoopSample> samples;
   // Largest change between consecutive ticks, |.(k) - .(k-1)|_inf [N m], and when it happened:
-  double max_null_torque_jump = 0.0;  // of the null-space command (I - J^T J#^T) tau_S
+  double max_null_torque_jump = 0.0;  // of the FME null-space command (I - J^T J#^T)(-beta grad nu - K_d q_dot)
+  double max_limit_torque_jump = 0.0;  // of the joint-limit avoidance command
+  double limit_distance = 0.0;         // closest approach to a joint limit [rad]
   double jump_time = 0.0;
   double max_applied_null_jump = 0.0;  // of the applied null-space torque (after the limit scaling)
   double transition_duration = 0.0;   // rho |M_free - M_stiff|_F [s]

@@ -1,6 +1,7 @@
 #include "uhaptics/backends/simulated_planar_linkage.hpp"
 
 #include <Eigen/Cholesky>
+#include <algorithm>
 #include <cmath>
 
 #include "uhaptics/core/limits.hpp"
@@ -51,6 +52,24 @@ Fault SimulatedPlanarLinkage<N>::step(const JointVector& tau_command, double dt)
   return fault;
 }
 
+// Mechanical stops at the model's joint limits: beyond a bound the limited coordinate s_j = C_j q
+// meets a stiff spring-damper that only pushes back (assumed: 100 N m/rad, 0.5 N m s/rad, a rubber
+// bumper; stable at the 0.1 ms sub-step for the RHI's smallest joint inertia). Added to the
+// resistive torque f.
+template <int N>
+void SimulatedPlanarLinkage<N>::addStopTorque(JointVector& f) const noexcept {
+  constexpr double kStopStiffness = 100.0, kStopDamping = 0.5;
+  const JointLimits<N>& l = model_.jointLimits();
+  if (!l.any()) return;
+  const JointVector s = l.map * q_, sd = l.map * qd_;
+  for (int j = 0; j < N; ++j) {
+    double push = 0.0;  // generalized force on s_j
+    if (s(j) < l.lower(j)) push = std::max(0.0, kStopStiffness * (l.lower(j) - s(j)) - kStopDamping * sd(j));
+    else if (s(j) > l.upper(j)) push = std::min(0.0, -kStopStiffness * (s(j) - l.upper(j)) - kStopDamping * sd(j));
+    if (push != 0.0) f.noalias() -= push * l.map.row(j).transpose();
+  }
+}
+
 template <int N>
 void SimulatedPlanarLinkage<N>::substep(double h) noexcept {
   Mat<2, N> J;
@@ -65,6 +84,7 @@ void SimulatedPlanarLinkage<N>::substep(double h) noexcept {
   model_.massMatrix(q_, M);
   model_.velocityProductTorque(q_, qd_, c);
   model_.frictionTorque(qd_, f, &dfdqd);
+  addStopTorque(f);
   // (M + h D) qd' = M qd + h (tau + J^T F - c - f(qd) + D qd), D = df/dqd, plus the load damping
   // reflected to the joints (J^T B J), both treated implicitly for stability at any sub-step.
   Mat<N, N> D = dfdqd.asDiagonal();

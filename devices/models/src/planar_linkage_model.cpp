@@ -34,6 +34,9 @@ PlanarLinkageModel<N>::PlanarLinkageModel(Parameters p) : p_(std::move(p)) {
     throw Error(d + ": coupling, angle offsets, base and home must be finite");
   if (!(p_.coulomb_velocity > 0.0) || !std::isfinite(p_.coulomb_velocity))
     throw Error(d + ": coulomb_velocity must be positive");
+  if (!p_.joint_limits.valid()) throw Error(d + ": joint limits need a finite map and lower < upper in every row");
+  if (!p_.joint_limits.contains(p_.home))
+    throw Error(d + ": the home configuration violates the joint limits");
   // Every joint must move some link, or the Jacobian has a zero column everywhere.
   for (int j = 0; j < N; ++j)
     if (p_.coupling.col(j).cwiseAbs().maxCoeff() == 0.0)
@@ -61,6 +64,13 @@ PlanarLinkageModel<N> PlanarLinkageModel<N>::fromFile(const std::string& path, c
   p.coulomb_velocity = f.number("friction/coulomb_smoothing_velocity", 1e-6, 1.0);
   p.torque_limit = f.vector<N>("actuators/torque_limits", 1e-6, 1000.0);
   p.home = f.vector<N>("configuration/home", -10.0, 10.0);
+  if (f.has("limits/joint_limits")) {  // optional: devices without stops omit it
+    const auto map = f.numbers("limits/joint_limits/map", static_cast<std::size_t>(N * N), -10.0, 10.0);
+    for (int i = 0; i < N; ++i)
+      for (int j = 0; j < N; ++j) p.joint_limits.map(i, j) = map[static_cast<std::size_t>(i * N + j)];
+    p.joint_limits.lower = f.vector<N>("limits/joint_limits/lower", -10.0, 10.0);
+    p.joint_limits.upper = f.vector<N>("limits/joint_limits/upper", -10.0, 10.0);
+  }
   try {
     return PlanarLinkageModel(std::move(p));
   } catch (const Error& e) {

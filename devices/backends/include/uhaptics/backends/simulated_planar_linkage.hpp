@@ -3,9 +3,10 @@
 // dynamics of PlanarLinkageModel with joint friction (viscous + smoothed Coulomb), actuator torque
 // saturation and a linear end-effector load standing in for the user's hand or a guide rail,
 //
-//   M(q) q_ddot + c(q, q_dot) + f(q_dot) = sat(tau_cmd) + J^T F_ext,
+//   M(q) q_ddot + c(q, q_dot) + f(q_dot) + tau_stop(q, q_dot) = sat(tau_cmd) + J^T F_ext,
 //   F_ext = bias + K (anchor - x) - B x_dot,
 //
+// with tau_stop a stiff one-sided spring-damper at the model's joint limits (mechanical stops),
 // integrated at a fixed sub-step (default 0.1 ms) finer than the servo period, with a linearly
 // implicit Euler step for the friction (stiff near zero velocity because of the Coulomb smoothing).
 // step() is allocation-free and never throws.
@@ -52,6 +53,7 @@ class SimulatedPlanarLinkage {
 
  private:
   void substep(double h) noexcept;
+  void addStopTorque(JointVector& f) const noexcept;
 
   Model model_;
   double substep_;

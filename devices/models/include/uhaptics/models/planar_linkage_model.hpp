@@ -25,6 +25,7 @@
 #include <cmath>
 #include <string>
 
+#include "uhaptics/core/joint_limits.hpp"
 #include "uhaptics/core/types.hpp"
 
 namespace uhaptics {
@@ -44,6 +45,7 @@ struct PlanarLinkageParameters {
   double coulomb_velocity = 1e-3;  // smoothing of the Coulomb term, tanh(q_dot / v) [rad/s]
   Vec<N> torque_limit;         // |tau_i| <= T_i [N m]
   Vec<N> home;                 // configuration at power-on [rad]
+  JointLimits<N> joint_limits; // mechanical range, lower <= C q <= upper (default: none)
 };
 
 template <int N>
@@ -78,6 +80,7 @@ class PlanarLinkageModel {
   const Parameters& parameters() const noexcept { return p_; }
   const JointVector& torqueLimits() const noexcept { return p_.torque_limit; }
   const JointVector& home() const noexcept { return p_.home; }
+  const JointLimits<N>& jointLimits() const noexcept { return p_.joint_limits; }
   /// Sum of link lengths: the radius of the reachable disc around the base.
   double reach() const noexcept { return p_.link_length.sum(); }
 

@@ -4,12 +4,14 @@
 //
 //   void jacobianDerivative(const JointVector& q, int k, Jacobian& dJ) const noexcept;  // dJ/dq_k
 //   void massMatrix(const JointVector& q, Mat<kJoints, kJoints>& M) const noexcept;   // joint space
+//   const JointLimits<kJoints>& jointLimits() const noexcept;                          // mechanical limits
 //
 // Without jacobianDerivative a renderer differentiates jacobian() numerically; without massMatrix
-// it uses the kinematic (identity-metric) null space.
+// it uses the kinematic (identity-metric) null space; without jointLimits it assumes none.
 #include <type_traits>
 #include <utility>
 
+#include "uhaptics/core/joint_limits.hpp"
 #include "uhaptics/core/kinematic_model.hpp"
 
 namespace uhaptics {
@@ -31,5 +33,13 @@ struct HasMassMatrix<M, std::void_t<decltype(std::declval<const M&>().massMatrix
     : std::true_type {};
 template <typename M>
 inline constexpr bool kHasMassMatrix = HasMassMatrix<M>::value;
+
+template <typename M, typename = void>
+struct HasJointLimits : std::false_type {};
+template <typename M>
+struct HasJointLimits<M, std::enable_if_t<std::is_convertible_v<decltype(std::declval<const M&>().jointLimits()),
+                                                                const JointLimits<M::kJoints>&>>> : std::true_type {};
+template <typename M>
+inline constexpr bool kHasJointLimits = HasJointLimits<M>::value;
 
 }  // namespace uhaptics

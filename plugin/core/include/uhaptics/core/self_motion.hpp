@@ -7,6 +7,7 @@
 #include <cmath>
 
 #include "uhaptics/core/fme_cost.hpp"
+#include "uhaptics/core/joint_limits.hpp"
 #include "uhaptics/core/regularized_solve.hpp"
 
 namespace uhaptics::fme {
@@ -17,6 +18,10 @@ struct SelfMotionOptions {
   double max_joint_step = 0.05;    // rad, largest joint change per iteration
   double gradient_tolerance = 1e-7;  // on the null-space-projected gradient
   double position_tolerance = 1e-9;  // m
+  // With joint limits: minimize nu + limit_weight P(q) (joint_limits.hpp), the potential the
+  // null-space controller descends when limit_weight = limit_gain / beta.
+  double limit_weight = 0.0;
+  double limit_margin = 0.25;  // rad
 };
 
 struct SelfMotionResult {
@@ -24,6 +29,7 @@ struct SelfMotionResult {
   double nu = 0.0;
   double projected_gradient_norm = 0.0;
   double position_error = 0.0;
+  double limit_potential = 0.0;  // P(q) at the end (0 when no limit is within its margin)
   bool converged = false;
   bool valid = false;  // false when the cost was undefined along the way (singular arm)
 };
@@ -46,20 +52,35 @@ double projectOnto(const Model& model, Vec<Model::kJoints>& q, const Vec<Model::
   return err;
 }
 
-/// Moves q (in place) to a local minimum of nu(q) subject to forward(q) = x_target.
+/// Moves q (in place) to a local minimum of nu(q) (+ limit_weight P(q) when `limits` is given)
+/// subject to forward(q) = x_target.
 template <class Model>
 SelfMotionResult optimizeSelfMotion(const Model& model, Vec<Model::kJoints>& q, const Vec<Model::kTask>& x_target,
                                     const Vec<Model::kJoints>& inv_limits_sq,
-                                    const Mat<Model::kTask, Model::kTask>& Mdes, const SelfMotionOptions& opt = {}) {
+                                    const Mat<Model::kTask, Model::kTask>& Mdes, const SelfMotionOptions& opt = {},
+                                    const JointLimits<Model::kJoints>* limits = nullptr) {
   constexpr int N = Model::kJoints, M = Model::kTask;
+  const bool use_limits = limits != nullptr && opt.limit_weight > 0.0;
+  // Total cost; false where nu is undefined.
+  auto cost = [&](const Vec<N>& qc, double& nu_out, double& total_out) {
+    if (!fmeCostValue(model, qc, inv_limits_sq, Mdes, nu_out)) return false;
+    total_out = nu_out + (use_limits ? opt.limit_weight * jointLimitPotential(*limits, qc, opt.limit_margin) : 0.0);
+    return true;
+  };
   SelfMotionResult r;
   r.position_error = projectOnto(model, q, x_target);
   Mat<M, N> J;
-  Vec<N> grad;
-  double step = opt.initial_step;
+  Vec<N> grad, limit_grad;
+  double step = opt.initial_step, total = 0.0;
   for (r.iterations = 0; r.iterations < opt.max_iterations; ++r.iterations) {
     model.jacobian(q, J);
     if (!fmeCostGradient(model, q, J, inv_limits_sq, Mdes, GradientMethod::kAnalytic, r.nu, grad)) return r;
+    total = r.nu;
+    if (use_limits) {
+      total += opt.limit_weight * jointLimitPotential(*limits, q, opt.limit_margin);
+      jointLimitGradient(*limits, q, opt.limit_margin, limit_grad);
+      grad += opt.limit_weight * limit_grad;
+    }
     const Vec<N> g_null = grad - regularizedSolve(J, (J * grad).eval());
     r.projected_gradient_norm = g_null.norm();
     if (r.projected_gradient_norm < opt.gradient_tolerance) {
@@ -72,8 +93,8 @@ SelfMotionResult optimizeSelfMotion(const Model& model, Vec<Model::kJoints>& q, 
       const double scale = std::min(step, opt.max_joint_step / g_null.cwiseAbs().maxCoeff());
       Vec<N> trial = q - scale * g_null;
       projectOnto(model, trial, x_target);
-      double nu_trial = 0.0;
-      if (fmeCostValue(model, trial, inv_limits_sq, Mdes, nu_trial) && nu_trial < r.nu) {
+      double nu_trial = 0.0, total_trial = 0.0;
+      if (cost(trial, nu_trial, total_trial) && total_trial < total) {
         q = trial;
         accepted = true;
         step = std::min(step * 1.5, 1e3);
@@ -87,7 +108,8 @@ SelfMotionResult optimizeSelfMotion(const Model& model, Vec<Model::kJoints>& q, 
     }
   }
   r.position_error = projectOnto(model, q, x_target);
-  r.valid = fmeCostValue(model, q, inv_limits_sq, Mdes, r.nu);
+  r.valid = cost(q, r.nu, total);
+  r.limit_potential = use_limits ? jointLimitPotential(*limits, q, opt.limit_margin) : 0.0;
   return r;
 }
 

@@ -2,7 +2,7 @@
 // Force-manipulability null-space controller for redundant haptic devices (paper 003):
 //
 //   tau   = J^T (alpha F) + (I - J^T J#^T) tau_S,      J# = M^-1 J^T (J M^-1 J^T)^-1
-//   tau_S = -beta d nu/dq - K_d q_dot
+//   tau_S = -beta d nu/dq - K_d q_dot - k_L d P/dq
 //
 // The primary task is the force F a renderer (a virtual wall, a CHAI3D force algorithm) asks for;
 // alpha <= 1 scales it uniformly when an actuator would saturate, so its direction is kept. The
@@ -10,10 +10,13 @@
 // force manipulability ellipsoid matches a desired one: in free motion and soft contact the minor
 // axis lies along the motion (light, low back-drive friction), in stiff contact the major axis
 // lies along the force (strong). The saturation observer V of the primary torques drives a
-// hysteresis switch between the two with a half-cosine blend (ellipsoid_transition.hpp).
+// hysteresis switch between the two with a half-cosine blend (ellipsoid_transition.hpp). P is a
+// smooth barrier of the device's joint limits (joint_limits.hpp): zero away from them, so the
+// paper's controller is unchanged there, and growing without bound at them, so the self-motion
+// never drives the arm into a stop (the paper's device has them; the paper does not model them).
 //
 // Generic over any model satisfying the kinematic-model interface with kJoints > kTask; uses the
-// model's Jacobian derivatives and mass matrix when it has them (model_capabilities.hpp). The
+// model's Jacobian derivatives, mass matrix and joint limits when it has them (model_capabilities.hpp). The
 // tick never throws and never allocates; on bad input it reports a Fault and commands zero torque
 // (non-finite input) or the primary task alone (singular Jacobian, undefined cost), always within
 // the torque limits.
@@ -22,6 +25,7 @@
 #include "uhaptics/core/ellipsoid_transition.hpp"
 #include "uhaptics/core/fault.hpp"
 #include "uhaptics/core/fme_cost.hpp"
+#include "uhaptics/core/joint_limits.hpp"
 #include "uhaptics/core/limits.hpp"
 #include "uhaptics/core/null_space.hpp"
 #include "uhaptics/core/saturation_observer.hpp"
@@ -50,6 +54,12 @@ struct FmeControllerOptions {
   fme::GradientMethod gradient = fme::GradientMethod::kAnalytic;
   double contact_force_threshold = 1e-6;  // |F| below this counts as free motion [N]
   double min_inverse_condition = 1e-6;    // lambda_min / lambda_max of J W W J^T below this = singular
+  // Joint-limit avoidance (limits from the model's jointLimits() or setJointLimits()): barrier
+  // active within limit_margin of a bound, torque limit_gain (1 - margin^2 / d^2) at distance d.
+  // limit_gain = 0 turns it off. Assumed values (the paper has no limit term): 0.5 N m and
+  // 0.25 rad keep the RHI at least ~0.1 rad from its stops against beta = 20 (tests/rhi).
+  double limit_gain = 0.5;    // k_L [N m]
+  double limit_margin = 0.25; // delta [rad]
 };
 
 /// What one tick computed (for logging and figures).
@@ -60,12 +70,13 @@ struct FmeControllerStatus {
   double omega = 1.0;      // activation (1 = free ellipsoid, 0 = stiff)
   double cost = 0.0;       // nu
   double alpha = 1.0;      // force scaling
-  double null_space_scale = 1.0;  // fraction of tau_N kept to stay within the limits
+  double null_space_scale = 1.0;  // fraction of the FME null-space torque kept to stay within the torque limits
   bool skipped_contact_work = false;  // free-motion fast path taken
   Vec<kTask> force = Vec<kTask>::Zero();  // force actually commanded (alpha F)
   Vec<kJoints> tau_primary = Vec<kJoints>::Zero();
   Vec<kJoints> tau_null = Vec<kJoints>::Zero();          // applied null-space torque (after limits)
   Vec<kJoints> tau_null_command = Vec<kJoints>::Zero();  // (I - J^T J#^T) tau_S before the limits
+  Vec<kJoints> tau_limit_command = Vec<kJoints>::Zero();  // its joint-limit avoidance part
 };
 
 template <class Model>
@@ -82,13 +93,17 @@ class FmeNullSpaceController {
   using Options = FmeControllerOptions<M>;
   using Status = FmeControllerStatus<N, M>;
 
-  /// torque_limits T_i > 0; home: the configuration whose FME sets K and zeta. Throws
+  /// torque_limits T_i > 0; home: the configuration whose FME sets K and zeta. Joint limits come
+  /// from the model when it has them (none otherwise; see setJointLimits). Throws
   /// uhaptics::Error on invalid limits, a singular home configuration or invalid options.
   FmeNullSpaceController(const Model& model, const JointVector& torque_limits, const JointVector& home,
                          const Options& options = {})
       : model_(model), limits_(torque_limits) {
     if (!limits_.allFinite() || !(limits_.minCoeff() > 0.0))
       throw Error("FME controller: torque limits must be finite and positive");
+    if constexpr (kHasJointLimits<Model>) {
+      if (setJointLimits(model_.jointLimits()) != Fault::kNone) throw Error("FME controller: invalid joint limits");
+    }
     inv_limits_sq_ = fme::inverseSquaredLimits(limits_);
     Mat<M, N> J;
     model_.jacobian(home, J);
@@ -108,7 +123,8 @@ class FmeNullSpaceController {
                     o.observer_shape > 0.0 && o.transition.valid() && o.motion_direction.allFinite() &&
                     o.motion_direction.norm() > 0.0 && std::isfinite(o.major_axis) && o.major_axis >= 0.0 &&
                     std::isfinite(o.minor_axis) && o.minor_axis >= 0.0 && o.contact_force_threshold >= 0.0 &&
-                    o.min_inverse_condition > 0.0 && o.min_inverse_condition < 1.0;
+                    o.min_inverse_condition > 0.0 && o.min_inverse_condition < 1.0 && std::isfinite(o.limit_gain) &&
+                    o.limit_gain >= 0.0 && std::isfinite(o.limit_margin) && o.limit_margin > 0.0;
     if (!ok) return Fault::kInvalidParameter;
     const fme::EllipsoidScales s = fme::ellipsoidScales(home_fme_, o.mu);
     const double major = o.major_axis > 0.0 ? o.major_axis : s.major;
@@ -129,6 +145,15 @@ class FmeNullSpaceController {
   Fault setFreeEllipsoid(const TaskMatrix& free_fme) noexcept {
     if (!fme::isSymmetricPositiveDefinite(free_fme)) return Fault::kInvalidParameter;
     free_fme_ = free_fme;
+    return Fault::kNone;
+  }
+
+  /// Replaces the joint limits the null-space task keeps away from (e.g. tighter software stops).
+  /// Rejects invalid ones (Fault::kInvalidParameter, old ones kept); JointLimits<N>{} = none.
+  Fault setJointLimits(const JointLimits<N>& limits) noexcept {
+    if (!limits.valid()) return Fault::kInvalidParameter;
+    joint_limits_ = limits;
+    has_joint_limits_ = limits.any();
     return Fault::kNone;
   }
 
@@ -196,19 +221,19 @@ class FmeNullSpaceController {
     if (!nullSpaceProjector(J_, mass_inv_, projector_)) return finish(Fault::kSingular, tau, true);
     const JointVector tau_s = -options_.beta * grad_ - options_.damping * qd;
     status_.tau_null_command.noalias() = projector_ * tau_s;
-    status_.tau_null = status_.tau_null_command;
-    // Keep the primary task intact: shrink tau_N until every joint is within its limit.
-    double gamma = 1.0;
-    for (int i = 0; i < N; ++i) {
-      const double total = tau(i) + status_.tau_null(i);
-      if (std::abs(total) > limits_(i) && status_.tau_null(i) != 0.0) {
-        const double room = (total > 0.0 ? limits_(i) : -limits_(i)) - tau(i);
-        gamma = std::min(gamma, std::max(0.0, room / status_.tau_null(i)));
-      }
+    status_.tau_limit_command.setZero();
+    if (has_joint_limits_ && options_.limit_gain > 0.0) {
+      jointLimitGradient(joint_limits_, q, options_.limit_margin, limit_grad_);
+      status_.tau_limit_command.noalias() = -options_.limit_gain * (projector_ * limit_grad_);
+      status_.tau_null_command += status_.tau_limit_command;
     }
-    status_.null_space_scale = gamma;
-    status_.tau_null *= gamma;
+    // Keep the primary task intact: shrink tau_N until every joint is within its limit. The FME and
+    // joint-limit terms shrink together, so where they balance (the settled configuration near a
+    // limit) they still do.
+    const double gamma = fitIntoLimits(tau, status_.tau_null_command);
+    status_.tau_null = gamma * status_.tau_null_command;
     tau += status_.tau_null;
+    status_.null_space_scale = gamma;
     return finish(Fault::kNone, tau, true);
   }
 
@@ -223,8 +248,23 @@ class FmeNullSpaceController {
   const TaskMatrix& homeFme() const noexcept { return home_fme_; }
   const JointVector& torqueLimits() const noexcept { return limits_; }
   const JointVector& inverseSquaredLimits() const noexcept { return inv_limits_sq_; }
+  const JointLimits<N>& jointLimits() const noexcept { return joint_limits_; }
 
  private:
+  // Largest gamma in [0, 1] with |base_i + gamma add_i| <= T_i wherever add moves base outwards
+  // (base itself is within the limits).
+  double fitIntoLimits(const JointVector& base, const JointVector& add) const noexcept {
+    double gamma = 1.0;
+    for (int i = 0; i < N; ++i) {
+      const double total = base(i) + add(i);
+      if (std::abs(total) > limits_(i) && add(i) != 0.0) {
+        const double room = (total > 0.0 ? limits_(i) : -limits_(i)) - base(i);
+        gamma = std::min(gamma, std::max(0.0, room / add(i)));
+      }
+    }
+    return gamma;
+  }
+
   void updateDesired(double t) noexcept {
     double omega = 1.0;
     switch (options_.mode) {
@@ -248,6 +288,7 @@ class FmeNullSpaceController {
     if (fault != Fault::kNone) {
       status_.tau_null.setZero();
       status_.tau_null_command.setZero();
+      status_.tau_limit_command.setZero();
     }
     if (zeroIfNonFinite(tau) != Fault::kNone && fault == Fault::kNone) fault = Fault::kNonFiniteResult;
     clampSymmetric(tau, limits_);
@@ -257,6 +298,8 @@ class FmeNullSpaceController {
 
   Model model_;
   JointVector limits_, inv_limits_sq_;
+  JointLimits<N> joint_limits_;
+  bool has_joint_limits_ = false;
   TaskMatrix home_fme_ = TaskMatrix::Identity();
   Options options_;
   double major_ = 1.0, minor_ = 1.0;
@@ -267,7 +310,7 @@ class FmeNullSpaceController {
   Status status_;
   // Workspace (preallocated: the tick touches no heap).
   Mat<M, N> J_;
-  JointVector grad_ = JointVector::Zero();
+  JointVector grad_ = JointVector::Zero(), limit_grad_ = JointVector::Zero();
   Mat<N, N> mass_, mass_inv_, projector_;
 };
 
