@@ -80,6 +80,7 @@ void TauModel::finalize() {
   const Fault f = forward(home_q_, data);
   if (f != Fault::kNone) throw Error(std::string("forward kinematics fails at the home pose: ") + toString(f));
   if ((data.pose - home_pose_).norm() > 1e-9) throw Error("forward and inverse kinematics disagree at the home pose");
+  assembly_mode_sign_ = data.lu.determinant() > 0.0 ? 1.0 : -1.0;
   Vec6 rotor_total = joint_inertia_;
   for (int i = 0; i < 6; ++i) {
     const double L1 = kinematics_->linkLength(i);
@@ -96,11 +97,26 @@ Fault TauModel::forward(const Vec6& q, TauData& data) const noexcept {
   Vec6 X = data.pose.allFinite() ? data.pose : home_pose_;
   double residual = 0.0;
   int iterations = 0;
-  Fault f = solvePose(*kinematics_, q, fk_tolerance_, fk_max_iterations_, X, data, residual, iterations);
+  // The closure equations have several solutions (assembly modes); Newton from a far warm start can
+  // land on another one. The device's own is the one the closed-form inverse maps back to q.
+  auto solveOwnMode = [&]() {
+    Fault r = solvePose(*kinematics_, q, fk_tolerance_, fk_max_iterations_, X, data, residual, iterations);
+    if (r == Fault::kNone) {
+      // Modes are separated by the singularities of dg/dX, so the device's own keeps the sign of
+      // det(dg/dX) it has at home; the inverse's leg branches must also map the pose back to q.
+      Vec6 q_back;
+      const bool other_mode = assembly_mode_sign_ != 0.0 && data.lu.determinant() * assembly_mode_sign_ <= 0.0;
+      if (other_mode || kinematics_->inverse(X, q_back) != Fault::kNone ||
+          !((q_back - q).cwiseAbs().maxCoeff() <= 1e-9))
+        r = Fault::kOutOfRange;
+    }
+    return r;
+  };
+  Fault f = solveOwnMode();
   if (f != Fault::kNone && f != Fault::kNonFiniteInput) {
     // A poor warm start (after a jump in q) gets one retry from the workspace centre.
     X = home_pose_;
-    f = solvePose(*kinematics_, q, fk_tolerance_, fk_max_iterations_, X, data, residual, iterations);
+    f = solveOwnMode();
   }
   data.fk_residual = residual;
   data.fk_iterations = iterations;

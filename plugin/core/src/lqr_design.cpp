@@ -70,7 +70,9 @@ StateSpace discretizeZoh(const StateSpace& c, double period) {
   d.A = E.topLeftCorner(n, n);
   d.B = E.block(0, n, n, m);
   if (r > 0) d.Bref = E.block(0, n + m, n, r);
-  if (!d.A.allFinite()) throw Error("discretizeZoh: matrix exponential overflowed");
+  // Any block can overflow on its own (e.g. a huge B next to a finite e^{AT}): check all of them.
+  if (!d.A.allFinite() || !d.B.allFinite() || !d.Bref.allFinite())
+    throw Error("discretizeZoh: matrix exponential overflowed");
   return d;
 }
 

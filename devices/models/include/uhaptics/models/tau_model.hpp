@@ -48,7 +48,9 @@ class TauModel {
   Fault inverse(const Vec6& pose, Vec6& q) const noexcept { return kinematics_->inverse(pose, q); }
   /// Newton's method on the loop-closure equations, warm-started from data.pose. On success fills
   /// data.pose, data.J (dX/dq) and the residual/iteration count; kNotConverged at the iteration cap,
-  /// kSingular when dg/dX is singular, kNonFiniteInput for NaN joints. Allocation-free.
+  /// kSingular when dg/dX is singular, kNonFiniteInput for NaN joints, kOutOfRange when the only
+  /// solution found is another assembly mode (det(dg/dX) of another sign than at home, or the inverse
+  /// does not map it back to q; e.g. after a glitched reading). data.pose is left unchanged on failure. Allocation-free.
   Fault forward(const Vec6& q, TauData& data) const noexcept;
   /// KinematicModel interface (stateless: starts from the home pose; x is NaN on failure).
   void forward(const Vec6& q, Vec6& x) const noexcept;
@@ -112,6 +114,7 @@ class TauModel {
   double characteristic_length_ = 0.05;
   double fk_tolerance_ = 1e-12;
   int fk_max_iterations_ = 30;
+  double assembly_mode_sign_ = 0.0;  // sign of det(dg/dX) at home (0: not known yet, no check)
 };
 
 /// Preallocated workspace for one device/thread.
