@@ -2,19 +2,14 @@
 #include <random>
 
 #include "rhi_experiments.hpp"
+#include "rhi_fixtures.hpp"
 #include "uhaptics/tools/alloc_probe.hpp"
 
 using namespace uhaptics;
 
 namespace {
-const Rhi4Model& rhi4() {
-  static const Rhi4Model m = rhi::loadRhi4(UHAPTICS_PARAMS_DIR);
-  return m;
-}
-Vec<4> randomConfiguration(std::mt19937& rng) {
-  std::uniform_real_distribution<double> angle(-M_PI, M_PI);
-  return Vec<4>(angle(rng), angle(rng), angle(rng), angle(rng));
-}
+using rhi_test::randomConfiguration;
+using rhi_test::rhi4;
 bool withinLimits(const Vec<4>& tau, const Vec<4>& limits) {
   return tau.allFinite() && (tau.cwiseAbs().array() <= limits.array() + 1e-12).all();
 }
