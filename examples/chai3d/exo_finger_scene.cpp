@@ -25,12 +25,6 @@ struct Touches {
   std::atomic<double> soft{0.0}, rigid{0.0};
 };
 
-void recordPeak(std::atomic<double>& a_peak, double a_value) {
-  double seen = a_peak.load();
-  while (a_value > seen && !a_peak.compare_exchange_weak(seen, a_value)) {
-  }
-}
-
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -85,8 +79,8 @@ int main(int argc, char** argv) {
       for (int i = 0; i < tool->getNumHapticPoints(); ++i) {
         cHapticPoint* point = tool->getHapticPoint(i);
         const double force = tool->getPointGlobalForce(i).length();
-        if (point->isInContact(soft)) recordPeak(touches.soft, force);
-        if (point->isInContact(rigid)) recordPeak(touches.rigid, force);
+        if (point->isInContact(soft)) uhaptics::scenes::recordPeak(touches.soft, force);
+        if (point->isInContact(rigid)) uhaptics::scenes::recordPeak(touches.rigid, force);
       }
     };
 

@@ -29,12 +29,6 @@ namespace {
 
 using Model = cRedundantPlanarDevice::Model;
 
-void recordPeak(std::atomic<double>& a_peak, double a_value) {
-  double seen = a_peak.load();
-  while (a_value > seen && !a_peak.compare_exchange_weak(seen, a_value)) {
-  }
-}
-
 const char* modeName(uhaptics::FmeEllipsoidMode a_mode) {
   switch (a_mode) {
     case uhaptics::FmeEllipsoidMode::kFree: return "free ellipse (fixed)";
@@ -126,8 +120,8 @@ int main(int argc, char** argv) {
       tool->computeInteractionForces();
       tool->applyToDevice();
       const double force = tool->getDeviceGlobalForce().length();
-      if (point->isInContact(stiff)) recordPeak(peak_stiff, force);
-      if (point->isInContact(soft)) recordPeak(peak_soft, force);
+      if (point->isInContact(stiff)) uhaptics::scenes::recordPeak(peak_stiff, force);
+      if (point->isInContact(soft)) uhaptics::scenes::recordPeak(peak_soft, force);
     };
 
     uhaptics::FmeEllipsoidMode mode = device->getNullSpaceOptions().mode;

@@ -42,12 +42,6 @@ void createTooth(cMesh* a_mesh, const cVector3d& a_crownCentre) {
   }
 }
 
-void recordPeak(std::atomic<double>& a_peak, double a_value) {
-  double seen = a_peak.load();
-  while (a_value > seen && !a_peak.compare_exchange_weak(seen, a_value)) {
-  }
-}
-
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -122,8 +116,8 @@ int main(int argc, char** argv) {
         if (point->isInContact(tooth)) touched_tooth = true;
         if (!in_contact) peak_episode = 0.0;
         in_contact = true;
-        recordPeak(peak_episode, depth);
-        recordPeak(lqr->getEnabled() ? peak_lqr : peak_spring, depth);
+        uhaptics::scenes::recordPeak(peak_episode, depth);
+        uhaptics::scenes::recordPeak(lqr->getEnabled() ? peak_lqr : peak_spring, depth);
       } else {
         in_contact = false;
       }

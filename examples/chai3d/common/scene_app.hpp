@@ -10,6 +10,7 @@
 //                          frame), so a run is the same on any machine, however slow its GL is.
 //                          --screenshot file.png saves the last frame (CHAI3D's cImage, PNG).
 // The same two options may come from UHAPTICS_SCENE_FRAMES and UHAPTICS_SCENE_SCREENSHOT.
+#include <atomic>
 #include <functional>
 #include <memory>
 #include <string>
@@ -76,5 +77,13 @@ class SceneApp {
 
 /// Haptic frames per bounded-mode frame for a device with servo period a_period [s].
 int hapticFramesPerFixedStep(double a_period);
+
+/// Raises a peak shared between the haptic thread (writer) and the graphics thread (reader),
+/// lock-free: retries only while another writer raised it in between.
+inline void recordPeak(std::atomic<double>& a_peak, double a_value) {
+  double seen = a_peak.load();
+  while (a_value > seen && !a_peak.compare_exchange_weak(seen, a_value)) {
+  }
+}
 
 }  // namespace uhaptics::scenes
