@@ -158,3 +158,41 @@ TEST_CASE("exo renderers never refuse a reachable proxy from a state inside the 
   }
   std::cout << "stress: exo in-range: " << n << " cases per method, no refusals\n";
 }
+
+TEST_CASE("exo renderers refuse a state the model flags outside its working range: fault, zero force") {
+  // Outside the stroke or the finger's range the model's forward() is only a continuation (clamped
+  // closures): rendering from it would push on a fictitious finger. Every method must refuse.
+  const auto gains = gainsWith(1e-3, 100.0);
+  StandardRenderer<Model> a(model(), gains);
+  NullSpaceRenderer<Model> b(model(), gains);
+  LinearizedSubspaceRenderer<Model> c(model(), gains);
+  NonlinearSubspaceRenderer<Model> d(model(), gains);
+  const Vec2 lo = model().jointLower(), hi = model().jointUpper();
+  const Vec2 mid = 0.5 * (lo + hi);
+  const Vec2 proxy = 0.5 * (model().taskLower() + model().taskUpper());
+  int refused = 0;
+  for (const Vec2& q : {Vec2(hi(0) + 1e-6, mid(1)), Vec2(lo(0) - 1e-6, mid(1)), Vec2(hi(0) + 0.05, mid(1)),
+                        Vec2(mid(0), hi(1) + 0.3), Vec2(mid(0), lo(1) - 0.3)}) {
+    REQUIRE_FALSE(model().inWorkingRange(q));
+    const auto refuses = [&](auto& renderer) {
+      Vec<1> tau = Vec<1>::Constant(1.0);
+      return renderer.tick(q, proxy, tau) == Fault::kOutOfRange && tau.isZero(0.0) &&
+             renderer.last().fault == Fault::kOutOfRange;
+    };
+    CHECK(refuses(a));
+    CHECK(refuses(b));
+    CHECK(refuses(c));
+    CHECK(refuses(d));
+    ++refused;
+  }
+  // Back inside, every method renders again (the refusal leaves no state behind).
+  Vec2 q;
+  REQUIRE(model().inverse(model().taskLower() + Model::TaskVector::Constant(0.3), q));
+  Vec<1> tau;
+  CHECK(a.tick(q, proxy, tau) == Fault::kNone);
+  CHECK(b.tick(q, proxy, tau) == Fault::kNone);
+  CHECK(c.tick(q, proxy, tau) == Fault::kNone);
+  CHECK(d.tick(q, proxy, tau) == Fault::kNone);
+  CHECK(tau(0) != 0.0);
+  CHECK(refused == 5);
+}

@@ -11,6 +11,7 @@
 #include "stress_support.hpp"
 #include "uhaptics/core/dare.hpp"
 #include "uhaptics/core/lqr_design.hpp"
+#include "uhaptics/models/exo_finger_model.hpp"
 #include "uhaptics/models/tau_model.hpp"
 
 using namespace uhaptics;
@@ -39,6 +40,11 @@ struct Outcome {
     std::cout << "stress: " << what << ": " << tried << " cases, " << accurate << " accurate (worst error " << worst
               << "), " << refused << " refused with an explicit error, " << wrong << " wrong\n";
   }
+  /// Prints the counts; true when no answer was wrong (the property every case asserts).
+  bool reportNoneWrong(const char* what) const {
+    print(what);
+    return wrong == 0;
+  }
 };
 
 // Solves and classifies against the exact P: within `tol` (relative, Frobenius), or refused.
@@ -54,6 +60,27 @@ void classifyDare(const MatX& A, const MatX& B, const MatX& Q, const MatX& R, co
   } catch (const Error&) {
     ++o.refused;
   }
+}
+// The Riccati recursion (value iteration from P = Q), an algorithm independent of the doubling:
+// at most `steps` steps, stopping early once P changes by <= rel_change (relative; 0: never).
+MatX riccatiRecursion(const MatX& A, const MatX& B, const MatX& Q, const MatX& R, int steps, double rel_change,
+                      bool* converged = nullptr) {
+  MatX P = Q;
+  bool done = false;
+  for (int k = 0; k < steps && !done; ++k) {
+    const MatX S = R + B.transpose() * P * B;
+    const MatX next = A.transpose() * P * A - A.transpose() * P * B * S.ldlt().solve(B.transpose() * P * A) + Q;
+    done = (next - P).norm() <= rel_change * next.norm();
+    P = next;
+  }
+  if (converged) *converged = done;
+  return P;
+}
+
+// A = diag(a), one input b, Q = I, R = 1: the pair must be refused by name, not solved.
+void checkRefusedAsUnstabilizable(const Vec2& a, const Vec2& b) {
+  const MatX A = a.asDiagonal(), B = b;
+  CHECK_THROWS_WITH(solveDare(A, B, MatX::Identity(2, 2), MatX::Identity(1, 1)), Catch::Contains("not stabilizable"));
 }
 }  // namespace
 
@@ -83,8 +110,7 @@ TEST_CASE("DARE, badly scaled weights 1e-6..1e9 on rotated decoupled plants: exa
     const MatX exact = T * p.asDiagonal() * T.transpose();
     classifyDare(A, B, Q, MatX(r.asDiagonal()), exact, 1e-7, o);
   }
-  o.print("DARE badly scaled");
-  CHECK(o.wrong == 0);
+  CHECK(o.reportNoneWrong("DARE badly scaled"));
   CHECK(o.accurate > o.tried / 2);  // most of them are solvable and must be solved
 }
 
@@ -92,6 +118,7 @@ TEST_CASE("DARE, vanishing input gain on an unstable mode: accurate while repres
   // a = 1.1 with b = delta: stabilizable for every delta > 0, P ~ 0.21 / delta^2. Once delta^2
   // underflows against the other entries the pair is numerically unstabilizable and must be refused
   // (not answered with a P that leaves the mode unstable).
+  checkRefusedAsUnstabilizable(Vec2(1.1, 0.5), Vec2(0, 1));  // the limit delta = 0
   Outcome o;
   for (double e = -1; e >= -300; e -= 1.0 / stress::scale()) {
     const double delta = std::pow(10.0, e);
@@ -103,12 +130,7 @@ TEST_CASE("DARE, vanishing input gain on an unstable mode: accurate while repres
     if (!std::isfinite(exact(0, 0))) break;
     classifyDare(A, B, Q, R, exact, 1e-8, o);
   }
-  MatX A(2, 2), B(2, 1);
-  A << 1.1, 0, 0, 0.5;
-  B << 0, 1;
-  CHECK_THROWS_WITH(solveDare(A, B, MatX::Identity(2, 2), MatX::Identity(1, 1)), Catch::Contains("not stabilizable"));
-  o.print("DARE vanishing input gain");
-  CHECK(o.wrong == 0);
+  CHECK(o.reportNoneWrong("DARE vanishing input gain"));
   CHECK(o.accurate > 5);
 }
 
@@ -122,14 +144,8 @@ TEST_CASE("DARE, two unstable modes sharing one input as their eigenvalues merge
     A << 1.1, 0, 0, 1.1 + eps;
     B << 1, 1;
     const MatX Q = MatX::Identity(2, 2), R = MatX::Identity(1, 1);
-    MatX P = Q;
     bool converged = false;
-    for (int k = 0; k < 200000 && !converged; ++k) {
-      const MatX S = R + B.transpose() * P * B;
-      const MatX next = A.transpose() * P * A - A.transpose() * P * B * S.ldlt().solve(B.transpose() * P * A) + Q;
-      converged = (next - P).norm() <= 1e-15 * next.norm();
-      P = next;
-    }
+    const MatX P = riccatiRecursion(A, B, Q, R, 200000, 1e-15, &converged);
     if (!converged) {
       ++o.tried;
       // No reference: the solver must refuse or return a verified stabilizing P.
@@ -146,12 +162,8 @@ TEST_CASE("DARE, two unstable modes sharing one input as their eigenvalues merge
     // The recursion's own rounding grows with P ~ 1/eps^2; 1e-6 relative is what it can vouch for.
     classifyDare(A, B, Q, R, P, 1e-6, o);
   }
-  MatX A(2, 2), B(2, 1);
-  A << 1.1, 0, 0, 1.1;
-  B << 1, 1;
-  CHECK_THROWS_WITH(solveDare(A, B, MatX::Identity(2, 2), MatX::Identity(1, 1)), Catch::Contains("not stabilizable"));
-  o.print("DARE merging unstable modes");
-  CHECK(o.wrong == 0);
+  checkRefusedAsUnstabilizable(Vec2(1.1, 1.1), Vec2(1, 1));  // the merge eps = 0
+  CHECK(o.reportNoneWrong("DARE merging unstable modes"));
   CHECK(o.refused > 0);
 }
 
@@ -166,15 +178,9 @@ TEST_CASE("DARE, nearly defective A (Jordan block perturbed by eps): matches the
       A << lambda, 1, eps, lambda;
       B << 0, 1;
       const MatX Q = MatX::Identity(2, 2), R = MatX::Identity(1, 1);
-      MatX P = Q;
-      for (int k = 0; k < 20000; ++k) {
-        const MatX S = R + B.transpose() * P * B;
-        P = A.transpose() * P * A - A.transpose() * P * B * S.ldlt().solve(B.transpose() * P * A) + Q;
-      }
-      classifyDare(A, B, Q, R, P, 1e-9, o);
+      classifyDare(A, B, Q, R, riccatiRecursion(A, B, Q, R, 20000, 0.0), 1e-9, o);
     }
-  o.print("DARE nearly defective A");
-  CHECK(o.wrong == 0);
+  CHECK(o.reportNoneWrong("DARE nearly defective A"));
   CHECK(o.accurate == o.tried);  // all of these are well posed
 }
 
@@ -448,4 +454,48 @@ TEST_CASE("TAU forward kinematics on joints with no assembly, NaN or huge values
             << " consistent poses, " << inconsistent << " inconsistent\n";
   CHECK(inconsistent == 0);
   CHECK(faults > 0);
+}
+
+namespace {
+const ExoFingerModel& exo() {
+  static const ExoFingerModel m = ExoFingerModel::load(ExoFingerModel::defaultParamsPath(UHAPTICS_PARAMS_DIR));
+  return m;
+}
+}  // namespace
+
+TEST_CASE("Exoskeleton forward kinematics: exact round trips for every real configuration; every other "
+          "reading is flagged by inWorkingRange") {
+  // The closed-form map q -> x solves two loop closures with acos. Outside the assembly region the
+  // model continues it by clamping (finite and continuous, so iterative solvers may step there) and
+  // documents inWorkingRange() as the test of a real configuration: a continued x must never be
+  // reported as real.
+  stress::AdversarialSource src(47);
+  const auto& jl = exo().jointLower();
+  const auto& ju = exo().jointUpper();
+  long tried = 0, exact = 0, flagged = 0, wrong = 0;
+  double worst = 0.0;
+  for (int k = 0; k < 4000 * stress::scale(); ++k) {
+    const Vec2 q(src.around(jl(0), ju(0)), src.around(jl(1), ju(1)));
+    Vec2 x;
+    exo().forward(q, x);
+    ++tried;
+    if (!exo().inWorkingRange(q)) {
+      ++flagged;
+      continue;
+    }
+    Vec2 q_back;
+    // Round trip through two closed forms: 1e-9 (m, rad) covers the acos conditioning near the
+    // edges of the range.
+    const double err = x.allFinite() && exo().inverse(x, q_back) ? (q_back - q).cwiseAbs().maxCoeff() : 1.0;
+    if (err < 1e-9) {
+      ++exact;
+      worst = std::max(worst, err);
+    } else {
+      ++wrong;
+    }
+  }
+  std::cout << "stress: exo FK: " << tried << " cases, " << exact << " real configurations with exact round trips "
+            << "(worst " << worst << "), " << flagged << " flagged as not real, " << wrong << " wrong\n";
+  CHECK(wrong == 0);
+  CHECK(exact > 100);
 }

@@ -73,6 +73,12 @@ static void BM_SpringWallTick(benchmark::State& state) {
 }
 BENCHMARK(BM_SpringWallTick);
 
+static void BM_SpringWallTick_FreeSpace(benchmark::State& state) {
+  SpringWallRenderer r(tauModel());
+  runTicks(state, r, false, false);
+}
+BENCHMARK(BM_SpringWallTick_FreeSpace);
+
 static void BM_SimulatedTauServoPeriod(benchmark::State& state) {
   SimulatedTau sim(tauModel(), SimulatedTauOptions{});
   TauData d(tauModel());

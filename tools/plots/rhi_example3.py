@@ -2,19 +2,9 @@
 """Paper 003, Fig. 3-4: the 3-DoF example. Top: joint torques and output force at the initial,
 free-optimized and stiff-optimized configurations. Bottom: the arm and its FME in each, with the
 desired ellipsoids. Usage: rhi_example3.py torques.csv configurations.csv out.png"""
-import csv
-import sys
+import numpy as np
 
-import matplotlib
-
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
-
-
-def read(path):
-    with open(path) as f:
-        return list(csv.DictReader(f))
+from plot_common import label, plt, read, run, save
 
 
 def ellipse(ax, center, xx, xy, yy, scale, **kw):
@@ -35,17 +25,11 @@ def main(torques, configs, out):
             ax.plot(t, [float(r[f"{key}_tau{i}"]) for r in ts], label=f"tau{i}")
         ax.axhline(0.5, color="k", ls=":", lw=0.8)
         ax.axhline(-0.5, color="k", ls=":", lw=0.8)
-        ax.set_title(f"{title}: joint torques")
-        ax.set_xlabel("t [s]")
-        ax.set_ylabel("N m")
-        ax.legend(fontsize=7)
+        label(ax, xlabel="t [s]", ylabel="N m", title=f"{title}: joint torques")
         ax = axes[1, col]
         ax.plot(t, [float(r["demanded_fx"]) for r in ts], "k--", label="F_e desired")
         ax.plot(t, [float(r[f"{key}_fx"]) for r in ts], label="F output")
-        ax.set_title(f"{title}: output force along x")
-        ax.set_xlabel("t [s]")
-        ax.set_ylabel("N")
-        ax.legend(fontsize=7)
+        label(ax, xlabel="t [s]", ylabel="N", title=f"{title}: output force along x")
     ax = axes[2, 0]
     colors = {"initial": "tab:blue", "free": "tab:red", "stiff": "tab:purple"}
     for c in cs:
@@ -61,19 +45,15 @@ def main(torques, configs, out):
     ellipse(ax, (xe, ye), float(c0["des_stiff_xx"]), float(c0["des_stiff_xy"]), float(c0["des_stiff_yy"]), 0.03,
             color="g", ls=":", label="desired stiff")
     ax.set_aspect("equal")
-    ax.set_title("configurations and FMEs (scaled)")
-    ax.legend(fontsize=7)
+    label(ax, title="configurations and FMEs (scaled)")
     for k in (1, 2):
         axes[2, k].axis("off")
     lines = [f"{c['config']}: peak force {float(c['peak_force']):.2f} N, min alpha {float(c['min_alpha']):.2f}, "
              f"nu {float(c['nu']):.3f}" for c in cs]
     axes[2, 1].text(0.0, 0.5, "\n".join(lines), fontsize=10, va="center")
     fig.suptitle("Paper 003 3-DoF example: F_e = [3.5 sin(pi t / 2), 0] N, |tau_i| <= 0.5 N m")
-    fig.tight_layout()
-    fig.savefig(out, dpi=110)
+    save(fig, out)
 
 
 if __name__ == "__main__":
-    if len(sys.argv) != 4:
-        sys.exit(__doc__)
-    main(*sys.argv[1:])
+    run(main, 3, __doc__)

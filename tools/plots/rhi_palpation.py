@@ -2,19 +2,9 @@
 """Paper 003, Fig. 9 / Table I: palpation with the free vs the stiff ellipsoid (rendered force vs
 demanded force over the push), and the identification data (force balance fit).
 Usage: rhi_palpation.py out_dir out.png"""
-import csv
 import os
-import sys
 
-import matplotlib
-
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-
-
-def read(path):
-    with open(path) as f:
-        return list(csv.DictReader(f))
+from plot_common import label, plt, read, run, save
 
 
 def main(folder, out):
@@ -29,13 +19,9 @@ def main(folder, out):
         axes[0].plot(t, [abs(float(r["force_y"])) for r in rows], color=color, label=f"{name}: rendered")
         for i in range(1, 5):
             axes[1].plot(t, [float(r[f"tau{i}"]) for r in rows], color=color, lw=0.8, alpha=0.4 + 0.15 * i)
-    axes[0].set_xlabel("t [s]")
-    axes[0].set_ylabel("|F| along u [N]")
-    axes[0].set_title("palpation force")
-    axes[0].legend(fontsize=7)
-    axes[1].set_xlabel("t [s]")
-    axes[1].set_ylabel("joint torque [N m]")
-    axes[1].set_title("joint torques (red free, purple stiff)")
+    label(axes[0], xlabel="t [s]", ylabel="|F| along u [N]", title="palpation force")
+    label(axes[1], xlabel="t [s]", ylabel="joint torque [N m]", title="joint torques (red free, purple stiff)",
+          legend=None)
     ident = read(os.path.join(folder, "identification.csv"))
     for name, color in (("free", "tab:red"), ("stiff", "tab:purple")):
         r = table[name]
@@ -49,15 +35,10 @@ def main(folder, out):
     lo = min([float(x["force_u"]) for x in ident] + [-1.0])
     hi = max([float(x["force_u"]) for x in ident] + [1.0])
     axes[2].plot([lo, hi], [lo, hi], "k:", lw=0.8)
-    axes[2].set_xlabel("measured force along u [N]")
-    axes[2].set_ylabel("M_x a + Phi v + F_c sign(v) [N]")
-    axes[2].set_title("identification fit")
-    axes[2].legend(fontsize=7)
-    fig.tight_layout()
-    fig.savefig(out, dpi=110)
+    label(axes[2], xlabel="measured force along u [N]", ylabel="M_x a + Phi v + F_c sign(v) [N]",
+          title="identification fit")
+    save(fig, out)
 
 
 if __name__ == "__main__":
-    if len(sys.argv) != 3:
-        sys.exit(__doc__)
-    main(*sys.argv[1:])
+    run(main, 2, __doc__)

@@ -2,18 +2,7 @@
 """Paper 003, Fig. 11: null-space torque without (a) and with (b) the smooth transition between the
 desired ellipsoids, and (c) the saturation observer V and the activation Omega.
 Usage: rhi_transition.py transition_smooth.csv transition_abrupt.csv out.png"""
-import csv
-import sys
-
-import matplotlib
-
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-
-
-def read(path):
-    with open(path) as f:
-        return list(csv.DictReader(f))
+from plot_common import label, plt, read, run, save
 
 
 def main(smooth_path, abrupt_path, out):
@@ -34,17 +23,10 @@ def main(smooth_path, abrupt_path, out):
         axes[3].plot(t, [abs(float(r["force_y"])) for r in rows], "r" + style, label=f"rendered |F| ({name})")
     axes[2].axhline(0.7, color="gray", lw=0.6)
     axes[2].axhline(0.95, color="gray", lw=0.6)
-    axes[2].set_ylabel("V, Omega")
-    axes[2].set_title("(c) saturation observer and activation (thresholds 0.7 / 0.95)")
-    axes[2].legend(fontsize=7)
-    axes[3].set_ylabel("force along u [N]")
-    axes[3].set_xlabel("t [s]")
-    axes[3].legend(fontsize=7)
-    fig.tight_layout()
-    fig.savefig(out, dpi=110)
+    label(axes[2], ylabel="V, Omega", title="(c) saturation observer and activation (thresholds 0.7 / 0.95)")
+    label(axes[3], xlabel="t [s]", ylabel="force along u [N]")
+    save(fig, out)
 
 
 if __name__ == "__main__":
-    if len(sys.argv) != 4:
-        sys.exit(__doc__)
-    main(*sys.argv[1:])
+    run(main, 3, __doc__)

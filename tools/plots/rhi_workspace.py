@@ -1,19 +1,13 @@
 #!/usr/bin/env python3
 """Paper 003, Fig. 10: ratio of the maximum force along u = [0, 1] with the stiff vs the free
 desired ellipsoid over the RHI's workspace. Usage: rhi_workspace.py workspace_ratio.csv out.png"""
-import csv
 import math
-import sys
 
-import matplotlib
-
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
+from plot_common import plt, read, run, save
 
 
 def main(path, out):
-    with open(path) as f:
-        rows = [r for r in csv.DictReader(f)]
+    rows = read(path)
     pts = [(float(r["x"]), float(r["y"]), float(r["ratio"])) for r in rows]
     ok = [p for p in pts if math.isfinite(p[2])]
     fig, ax = plt.subplots(figsize=(7, 6))
@@ -29,11 +23,8 @@ def main(path, out):
     ax.set_xlabel("x [m]")
     ax.set_ylabel("y [m]")
     ax.set_title("Force-capability ratio over the workspace (star: X0)")
-    fig.tight_layout()
-    fig.savefig(out, dpi=110)
+    save(fig, out)
 
 
 if __name__ == "__main__":
-    if len(sys.argv) != 3:
-        sys.exit(__doc__)
-    main(*sys.argv[1:])
+    run(main, 2, __doc__)

@@ -213,7 +213,11 @@ bool ExoFingerModel::taskInRange(const TaskVector& x, double tol) const noexcept
 }
 
 bool ExoFingerModel::inWorkingRange(const JointVector& q, double tol) const noexcept {
-  if (!q.allFinite() || q(0) < joint_lower_(0) - tol || q(0) > joint_upper_(0) + tol) return false;
+  // Both joints: the rocker too, since outside its range the four-bar can map q_B to an in-range
+  // PIP angle on another branch (a reading that is no configuration of this finger).
+  if (!q.allFinite() || (q.array() < joint_lower_.array() - tol).any() ||
+      (q.array() > joint_upper_.array() + tol).any())
+    return false;
   TaskVector x;
   forward(q, x);
   return taskInRange(x, tol);

@@ -1,6 +1,7 @@
 #include "uhaptics/models/tau_model.hpp"
 
 #include <Eigen/SVD>
+#include <algorithm>
 #include <cmath>
 #include <sstream>
 
@@ -104,10 +105,15 @@ Fault TauModel::forward(const Vec6& q, TauData& data) const noexcept {
     if (r == Fault::kNone) {
       // Modes are separated by the singularities of dg/dX, so the device's own keeps the sign of
       // det(dg/dX) it has at home; the inverse's leg branches must also map the pose back to q.
+      // The round trip is as exact as the pose: Newton stops at a closure residual <= fk_tolerance_
+      // (m), which moves the joints by ~residual / lever (~0.1 m); 1e3 rad/m covers that with margin
+      // and stays far below the distance between assembly modes (tenths of a radian). A fixed
+      // 1e-9 rad refused every pose for tolerances above ~1e-8 m (tools/bench/numerics_bench.cpp).
+      const double round_trip = std::max(1e-9, 1e3 * fk_tolerance_);
       Vec6 q_back;
       const bool other_mode = assembly_mode_sign_ != 0.0 && data.lu.determinant() * assembly_mode_sign_ <= 0.0;
       if (other_mode || kinematics_->inverse(X, q_back) != Fault::kNone ||
-          !((q_back - q).cwiseAbs().maxCoeff() <= 1e-9))
+          !((q_back - q).cwiseAbs().maxCoeff() <= round_trip))
         r = Fault::kOutOfRange;
     }
     return r;

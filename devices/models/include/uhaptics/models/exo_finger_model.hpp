@@ -76,7 +76,8 @@ class ExoFingerModel {
   /// Phalanx points for finger joint angles x.
   void points(const TaskVector& x, ExoFingerPoints& p) const noexcept;
 
-  /// Actuator inside its stroke and the finger inside its joint ranges (with tolerance tol, rad/m).
+  /// Actuator inside its stroke, rocker inside its range and the finger inside its joint ranges
+  /// (with tolerance tol, rad/m): q is a real configuration.
   bool inWorkingRange(const JointVector& q, double tol = 1e-9) const noexcept;
   bool taskInRange(const TaskVector& x, double tol = 1e-9) const noexcept;
 

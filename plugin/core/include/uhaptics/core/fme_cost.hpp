@@ -49,11 +49,13 @@ bool fmeCostValue(const Model& model, const Vec<Model::kJoints>& q, const Vec<Mo
 
 /// nu and d nu/dq at q, given J = jacobian(q) (the caller usually has it already). False when
 /// J W W J^T is singular to within min_inverse_condition (see weightedFme) or nu is undefined.
+/// fd_relative_step: the central-difference step of kFiniteDifference (centralDifferenceStep's
+/// default sits at the knee of its error curve: tools/bench/rhi_bench.cpp, README).
 template <class Model>
 bool fmeCostGradient(const Model& model, const Vec<Model::kJoints>& q, const Mat<Model::kTask, Model::kJoints>& J,
                      const Vec<Model::kJoints>& inv_limits_sq, const Mat<Model::kTask, Model::kTask>& Mdes,
                      GradientMethod method, double& nu, Vec<Model::kJoints>& grad,
-                     double min_inverse_condition = 1e-8) noexcept {
+                     double min_inverse_condition = 1e-8, double fd_relative_step = 6.0e-6) noexcept {
   constexpr int N = Model::kJoints, M = Model::kTask;
   Mat<M, M> Mhat, G;
   if (!weightedFme(J, inv_limits_sq, Mhat, min_inverse_condition) || !logDetDivergence(Mhat, Mdes, nu, &G))
@@ -66,7 +68,7 @@ bool fmeCostGradient(const Model& model, const Vec<Model::kJoints>& q, const Mat
   }
   Vec<N> qh = q;
   for (int k = 0; k < N; ++k) {
-    const double h = centralDifferenceStep(q(k));
+    const double h = centralDifferenceStep(q(k), fd_relative_step);
     double plus = 0.0, minus = 0.0;
     qh(k) = q(k) + h;
     const bool ok_plus = fmeCostValue(model, qh, inv_limits_sq, Mdes, plus);

@@ -5,9 +5,13 @@
 //   void jacobianDerivative(const JointVector& q, int k, Jacobian& dJ) const noexcept;  // dJ/dq_k
 //   void massMatrix(const JointVector& q, Mat<kJoints, kJoints>& M) const noexcept;   // joint space
 //   const JointLimits<kJoints>& jointLimits() const noexcept;                          // mechanical limits
+//   bool inWorkingRange(const JointVector& q) const noexcept;                         // q is a real state
 //
 // Without jacobianDerivative a renderer differentiates jacobian() numerically; without massMatrix
-// it uses the kinematic (identity-metric) null space; without jointLimits it assumes none.
+// it uses the kinematic (identity-metric) null space; without jointLimits it assumes none; without
+// inWorkingRange every finite q counts as a real state (models whose forward() continues outside
+// the assembly region, like the exoskeleton's, must offer it so that renderers refuse such states
+// instead of rendering from a fictitious configuration).
 #include <type_traits>
 #include <utility>
 
@@ -41,5 +45,14 @@ struct HasJointLimits<M, std::enable_if_t<std::is_convertible_v<decltype(std::de
                                                                 const JointLimits<M::kJoints>&>>> : std::true_type {};
 template <typename M>
 inline constexpr bool kHasJointLimits = HasJointLimits<M>::value;
+
+template <typename M, typename = void>
+struct HasWorkingRange : std::false_type {};
+template <typename M>
+struct HasWorkingRange<M, std::enable_if_t<std::is_same_v<
+                              decltype(std::declval<const M&>().inWorkingRange(std::declval<const Vec<M::kJoints>&>())),
+                              bool>>> : std::true_type {};
+template <typename M>
+inline constexpr bool kHasWorkingRange = HasWorkingRange<M>::value;
 
 }  // namespace uhaptics

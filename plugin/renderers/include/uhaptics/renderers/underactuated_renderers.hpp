@@ -13,7 +13,8 @@
 // q is the sensed device state (actuated and sensed-only joints), x_proxy the proxy the environment
 // computed in the task space. A CHAI3D adapter that has a Cartesian proxy force F instead passes
 // x_proxy = f(q) + Z_x^-1 F (the force read back as a displacement through the coupling stiffness).
-// On any fault tau_a is zero. Otherwise tau_a is finite and inside +-force_limit (clamped per
+// On any fault tau_a is zero (a state the model flags outside its working range, when the model
+// offers inWorkingRange(), is Fault::kOutOfRange). Otherwise tau_a is finite and inside +-force_limit (clamped per
 // actuator; `last().clamped` says so). `last()` holds the diagnostics of the latest tick (probe,
 // Jacobian, deviation, solver report); `displayedImpedance()` evaluates the method's theoretical
 // d tau / d q (eq. 2, 5, 9) at the latest tick's Jacobian, outside the servo path.
@@ -31,6 +32,7 @@
 #include "uhaptics/core/fault.hpp"
 #include "uhaptics/core/kinematic_model.hpp"
 #include "uhaptics/core/limits.hpp"
+#include "uhaptics/core/model_capabilities.hpp"
 #include "uhaptics/core/subspace_proxy_solver.hpp"
 #include "uhaptics/core/underactuated.hpp"
 
@@ -115,6 +117,11 @@ class UnderactuatedRendererBase {
     d_.free_space = false;
     d_.unclamped.setZero();
     if (!q.allFinite() || !x_proxy.allFinite()) return fail(Fault::kNonFiniteInput);
+    // A reading outside the mechanism's working range (a glitch, a miscalibrated sensor) is no
+    // configuration at all: the model's forward() there is only a continuation, so render nothing.
+    if constexpr (kHasWorkingRange<Model>) {
+      if (!model_.inWorkingRange(q)) return fail(Fault::kOutOfRange);
+    }
     model_.forward(q, d_.probe);
     if (!d_.probe.allFinite()) return fail(Fault::kNonFiniteResult);
     const TaskVector dx = x_proxy - d_.probe;
