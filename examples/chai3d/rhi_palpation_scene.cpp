@@ -10,12 +10,14 @@
 //   uhaptics-scene-rhi --frames 300 --screenshot rhi.png   bounded run; exit 1 unless both regions
 //                                                          were touched, the ellipse left its free
 //                                                          shape on stiff tissue, and no tick faulted
+//   UHAPTICS_CONFIG=cfg.json uhaptics-scene-rhi ...        device options from "options/rhi/..." in cfg.json
 #include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <array>
 #include <atomic>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 
 #include "scene_app.hpp"  // first: CHAI3D (GLEW) before GLFW
 #include <GLFW/glfw3.h>
@@ -42,7 +44,10 @@ const char* modeName(uhaptics::FmeEllipsoidMode a_mode) {
 int main(int argc, char** argv) {
   try {
     const uhaptics::scenes::SceneOptions options = uhaptics::scenes::SceneOptions::parse(argc, argv);
+    // Device options (e.g. options/rhi/limit_gain) may come from a UHAPTICS_CONFIG file.
     uhaptics::DeviceSelection selection;
+    if (std::getenv("UHAPTICS_CONFIG"))
+      selection = uhaptics::readDeviceSelection({"rhi"}, {"sim"}, [](const char* a_name) { return std::getenv(a_name); });
     selection.device = "rhi";
     // Palpation: press the stiff region (left), lift, move over, press the soft region (right).
     selection.hand.waypoints = {uhaptics::Vec3(0.0, -0.4, 0.1), uhaptics::Vec3(0.0, -0.4, -0.55),

@@ -56,9 +56,11 @@ struct FmeControllerOptions {
   double min_inverse_condition = 1e-6;    // lambda_min / lambda_max of J W W J^T below this = singular
   // Joint-limit avoidance (limits from the model's jointLimits() or setJointLimits()): barrier
   // active within limit_margin of a bound, torque limit_gain (1 - margin^2 / d^2) at distance d.
-  // limit_gain = 0 turns it off. Assumed values (the paper has no limit term): 0.5 N m and
-  // 0.25 rad keep the RHI at least ~0.1 rad from its stops against beta = 20 (tests/rhi).
-  double limit_gain = 0.5;    // k_L [N m]
+  // limit_gain = 0 turns it off. Assumed values (the paper has no limit term): 2 N m and 0.25 rad
+  // keep the RHI at least ~0.1 rad from its stops against beta = 20 when settled (tests/rhi) and
+  // slow the free-to-stiff swing enough that reaching a stop no longer kicks the end effector
+  // through a stiff wall (0.5 N m did: tests/rhi/rhi_scene_press_test.cpp).
+  double limit_gain = 2.0;    // k_L [N m]
   double limit_margin = 0.25; // delta [rad]
 };
 
