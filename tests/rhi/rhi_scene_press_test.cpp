@@ -1,8 +1,9 @@
 // The CHAI3D RHI scene's palpation without CHAI3D: a scripted hand (150 N/m, at most 8 N) presses
 // a stiff wall (K_e = 1000 N/m, 2 cm below home) from home in automatic mode. The free-to-stiff
-// switch swings the arm along its self-motion; with a joint-limit barrier too weak to stop that
-// swing (k_L = 0.5 N m, the earlier default) it reaches a mechanical stop, whose reaction is not in
-// the null space and kicks the end effector through the wall (16 N asked of a hand that pushes 8).
+// switch swings the arm along its self-motion at up to 15 rad/s (beta = 20); the joint-limit
+// barrier, a potential, cannot dissipate that, so without the approach-speed damper the arm reaches
+// a mechanical stop, whose reaction is not in the null space, and the end effector is kicked through
+// the wall (16 N asked of a hand that pushes 8).
 #include <catch2/catch.hpp>
 
 #include "rhi_experiments.hpp"
@@ -17,14 +18,12 @@ struct PressResult {
   double limit_distance = 1e9;  // closest approach to a joint limit [rad]
 };
 
-PressResult pressFromHome(double limit_gain) {
+PressResult pressFromHome(const rhi::Rhi4Controller::Options& options) {
   const auto& m = rhi_test::rhi4();
   Vec2 home_tip;
   m.forward(m.home(), home_tip);
   rhi::PalpationSetup setup;
   setup.x0 = home_tip + Vec2(0.0, 0.02);  // the scene's tissue top, 2 cm "below" home along u = +y
-  rhi::Rhi4Controller::Options options;
-  options.limit_gain = limit_gain;
   rhi::ClosedLoop loop(m, options, setup);
   loop.device().reset(m.home());
   // The scene's hand path in workspace radii (0.1 m) of the device frame (task x -> y, task y -> -z).
@@ -48,14 +47,15 @@ PressResult pressFromHome(double limit_gain) {
 }  // namespace
 
 TEST_CASE("scene press: the free-to-stiff swing never kicks the end effector through a stiff wall") {
-  const PressResult r = pressFromHome(rhi::Rhi4Controller::Options{}.limit_gain);
+  const PressResult r = pressFromHome({});
   // The device holds the hand: the wall force asked for stays near the hand's 8 N (dynamics of the
   // 150 N/m hand and 4 N s/m damping add a little; 25 %). A kick gives twice that.
   CHECK(r.peak_demand < 1.25 * 8.0);
-  // Not yet kept off the stop: the swing still passes a limit by 0.04 rad (but slowly enough not to
-  // kick through the wall). Open: a self-motion speed cap near the stops (README, RHI section).
-  CHECK(r.limit_distance > -0.05);
-  // The failure this guards against is real: the earlier barrier gain lets the swing hit a stop.
-  const PressResult weak = pressFromHome(0.5);
-  CHECK(weak.peak_demand > 1.25 * 8.0);
+  CHECK(r.limit_distance > 0.0);
+  // The failure this guards against is real: without the damper the swing hits a stop.
+  rhi::Rhi4Controller::Options undamped;
+  undamped.limit_speed = 0.0;
+  const PressResult kicked = pressFromHome(undamped);
+  CHECK(kicked.limit_distance < 0.0);
+  CHECK(kicked.peak_demand > 1.25 * 8.0);
 }

@@ -40,6 +40,7 @@ class cRedundantPlanarDevice : public cUhapticsDevice {
   ///   beta 20    null-space gradient gain;   damping 0.1   K_d [N m s/rad]
   ///   observer_shape 50   S of the saturation observer;   workspace_radius 0.1 [m]
   ///   limit_gain 0.5 [N m], limit_margin 0.25 [rad]   joint-limit barrier (0 gain: off)
+  ///   limit_speed 2 [rad/s]   approach-speed cap towards the joint limits (0: off)
   /// Throws uhaptics::Error when an option is out of range (naming it) or the set is inconsistent.
   cRedundantPlanarDevice(unsigned int a_deviceNumber, const uhaptics::DeviceSelection& a_selection);
   virtual ~cRedundantPlanarDevice();

@@ -20,7 +20,9 @@
 // tick never throws and never allocates; on bad input it reports a Fault and commands zero torque
 // (non-finite input) or the primary task alone (singular Jacobian, undefined cost), always within
 // the torque limits.
+#include <algorithm>
 #include <cmath>
+#include <tuple>
 
 #include "uhaptics/core/ellipsoid_transition.hpp"
 #include "uhaptics/core/fault.hpp"
@@ -56,12 +58,21 @@ struct FmeControllerOptions {
   double min_inverse_condition = 1e-6;    // lambda_min / lambda_max of J W W J^T below this = singular
   // Joint-limit avoidance (limits from the model's jointLimits() or setJointLimits()): barrier
   // active within limit_margin of a bound, torque limit_gain (1 - margin^2 / d^2) at distance d.
-  // limit_gain = 0 turns it off. Assumed values (the paper has no limit term): 2 N m and 0.25 rad
-  // keep the RHI at least ~0.1 rad from its stops against beta = 20 when settled (tests/rhi) and
-  // slow the free-to-stiff swing enough that reaching a stop no longer kicks the end effector
-  // through a stiff wall (0.5 N m did: tests/rhi/rhi_scene_press_test.cpp).
-  double limit_gain = 2.0;    // k_L [N m]
+  // limit_gain = 0 turns it off. Assumed values (the paper has no limit term): 0.5 N m and
+  // 0.25 rad keep the RHI at least ~0.1 rad from its stops against beta = 20 (tests/rhi).
+  double limit_gain = 0.5;    // k_L [N m]
   double limit_margin = 0.25; // delta [rad]
+  // Approach-speed cap (a velocity damper): a limited coordinate s_j = C_j q may approach a bound
+  // at most at limit_speed, falling in proportion to the distance inside the margin (zero at the
+  // bound); faster approach is braked by (C_j M C_j^T / limit_brake_time) times the excess,
+  // projected into the null space like the barrier. Why: the barrier is a potential and cannot
+  // dissipate; with beta = 20 the free-to-stiff switch swings the RHI along its self-motion at up
+  // to 15 rad/s, too fast to stop within the margin with 3 N m, so the arm reached the stop, whose
+  // reaction is not in the null space, and kicked the end effector through the rendered surface
+  // (tests/rhi/rhi_scene_press_test.cpp). Assumed: 2 rad/s (the settled reconfigurations of the
+  // palpation stay below 1 rad/s), 5 ms. limit_speed = 0 turns it off.
+  double limit_speed = 2.0;        // [rad/s]
+  double limit_brake_time = 0.005;  // [s] (5 servo periods at 1 kHz: stable in discrete time for T > dt / 2)
 };
 
 /// What one tick computed (for logging and figures).
@@ -126,7 +137,9 @@ class FmeNullSpaceController {
                     o.motion_direction.norm() > 0.0 && std::isfinite(o.major_axis) && o.major_axis >= 0.0 &&
                     std::isfinite(o.minor_axis) && o.minor_axis >= 0.0 && o.contact_force_threshold >= 0.0 &&
                     o.min_inverse_condition > 0.0 && o.min_inverse_condition < 1.0 && std::isfinite(o.limit_gain) &&
-                    o.limit_gain >= 0.0 && std::isfinite(o.limit_margin) && o.limit_margin > 0.0;
+                    o.limit_gain >= 0.0 && std::isfinite(o.limit_margin) && o.limit_margin > 0.0 &&
+                    std::isfinite(o.limit_speed) && o.limit_speed >= 0.0 && std::isfinite(o.limit_brake_time) &&
+                    o.limit_brake_time > 0.0;
     if (!ok) return Fault::kInvalidParameter;
     const fme::EllipsoidScales s = fme::ellipsoidScales(home_fme_, o.mu);
     const double major = o.major_axis > 0.0 ? o.major_axis : s.major;
@@ -208,15 +221,17 @@ class FmeNullSpaceController {
       const bool singular = !fme::weightedFme(J_, inv_limits_sq_, unused, options_.min_inverse_condition);
       return finish(singular ? Fault::kSingular : Fault::kInvalidParameter, tau, true);
     }
+    // The mass matrix: for the dynamically consistent inverse and the limit brake (identity, in
+    // kg m^2, for a model without one).
+    if constexpr (kHasMassMatrix<Model>) {
+      model_.massMatrix(q, mass_);
+    } else {
+      mass_.setIdentity();
+    }
     if (options_.dynamically_consistent) {
-      if constexpr (kHasMassMatrix<Model>) {
-        model_.massMatrix(q, mass_);
-        Eigen::LLT<Mat<N, N>> llt(mass_);
-        if (llt.info() != Eigen::Success) return finish(Fault::kInvalidParameter, tau, true);
-        mass_inv_ = llt.solve(Mat<N, N>::Identity());
-      } else {
-        mass_inv_.setIdentity();
-      }
+      Eigen::LLT<Mat<N, N>> llt(mass_);
+      if (llt.info() != Eigen::Success) return finish(Fault::kInvalidParameter, tau, true);
+      mass_inv_ = llt.solve(Mat<N, N>::Identity());
     } else {
       mass_inv_.setIdentity();
     }
@@ -226,7 +241,9 @@ class FmeNullSpaceController {
     status_.tau_limit_command.setZero();
     if (has_joint_limits_ && options_.limit_gain > 0.0) {
       jointLimitGradient(joint_limits_, q, options_.limit_margin, limit_grad_);
-      status_.tau_limit_command.noalias() = -options_.limit_gain * (projector_ * limit_grad_);
+      limit_grad_ *= -options_.limit_gain;
+      if (options_.limit_speed > 0.0) addLimitBrake(q, qd, limit_grad_);
+      status_.tau_limit_command.noalias() = projector_ * limit_grad_;
       status_.tau_null_command += status_.tau_limit_command;
     }
     // Keep the primary task intact: shrink tau_N until every joint is within its limit. The FME and
@@ -265,6 +282,25 @@ class FmeNullSpaceController {
       }
     }
     return gamma;
+  }
+
+  // Adds to tau the velocity damper of every bound within the margin (see Options::limit_speed).
+  void addLimitBrake(const JointVector& q, const JointVector& qd, JointVector& tau) const noexcept {
+    const double margin = options_.limit_margin;
+    for (int j = 0; j < N; ++j) {
+      const auto row = joint_limits_.map.row(j);
+      const double s = row.dot(q), sd = row.dot(qd);
+      // Distance and approach speed to each bound; +1: the distance grows with s (lower bound).
+      for (const auto& [distance, approach, sign] :
+           {std::tuple<double, double, double>{s - joint_limits_.lower(j), -sd, 1.0},
+            std::tuple<double, double, double>{joint_limits_.upper(j) - s, sd, -1.0}}) {
+        if (!std::isfinite(distance)) continue;
+        const double excess = approach - options_.limit_speed * std::clamp(distance / margin, 0.0, 1.0);
+        if (excess <= 0.0) continue;
+        const double inertia = row * mass_ * row.transpose();
+        tau += (sign * inertia * excess / options_.limit_brake_time) * row.transpose();
+      }
+    }
   }
 
   void updateDesired(double t) noexcept {
@@ -313,7 +349,7 @@ class FmeNullSpaceController {
   // Workspace (preallocated: the tick touches no heap).
   Mat<M, N> J_;
   JointVector grad_ = JointVector::Zero(), limit_grad_ = JointVector::Zero();
-  Mat<N, N> mass_, mass_inv_, projector_;
+  Mat<N, N> mass_ = Mat<N, N>::Identity(), mass_inv_, projector_;
 };
 
 }  // namespace uhaptics
