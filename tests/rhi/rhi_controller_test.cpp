@@ -249,9 +249,16 @@ TEST_CASE("palpation: stiff ellipsoid is stronger and heavier along u, both with
   REQUIRE(stiff_case.fit_valid);
   CHECK(stiff_case.inertia_identified > free_case.inertia_identified);
   CHECK(stiff_case.friction_model > free_case.friction_model);
-  // Least squares recovers the model's apparent inertia in the stiff configuration (far from
-  // singular, slowly varying over the +-2 cm window); the free one sits near the stretched-PHANTOM
-  // singularity where u^T Lambda u changes quickly with x, so only a loose bound holds there.
+  // Least squares recovers the model's apparent inertia (averaged over the samples' configurations)
+  // within 15 %.
   CHECK(stiff_case.inertia_identified == Approx(stiff_case.inertia_model).epsilon(0.15));
-  CHECK(free_case.inertia_identified == Approx(free_case.inertia_model).epsilon(0.5));
+  CHECK(free_case.inertia_identified == Approx(free_case.inertia_model).epsilon(0.15));
+  // Viscous friction (FME gradient paused during the identification, see runPalpation): positive
+  // and ordered as in the paper; the free value recovers the reflected joint friction (25 %: the
+  // Coulomb term, smoothed in the simulator, trades against it); the stiff one comes out 40 % high
+  // with the Coulomb part correspondingly low, so only a loose bound holds there.
+  CHECK(free_case.friction_identified > 0.0);
+  CHECK(stiff_case.friction_identified > free_case.friction_identified);
+  CHECK(free_case.friction_identified == Approx(free_case.friction_model).epsilon(0.25));
+  CHECK(stiff_case.friction_identified == Approx(stiff_case.friction_model).epsilon(0.6));
 }

@@ -183,6 +183,23 @@ ClosedLoop settledLoop(const Rhi4Model& model, const Rhi4Controller::Options& op
 }
 }  // namespace
 
+namespace {
+// The model's own values at q for a guided motion along u: inertia u^T Lambda u, reflected joint
+// viscous friction u^T J#^T B J# u and Coulomb sum_i c_i |(J# u)_i| (J, M: workspace).
+struct ReflectedAlong {
+  double inertia, viscous, coulomb;
+};
+ReflectedAlong reflectedAlong(const Rhi4Model& model, const Vec4& q, const Vec2& u, Mat<2, 4>& J, Mat<4, 4>& M) {
+  model.jacobian(q, J);
+  model.massMatrix(q, M);
+  const Mat<4, 2> MinvJt = M.llt().solve(J.transpose());
+  const Mat2 lambda = (J * MinvJt).inverse();
+  const Vec4 joint_per_u = MinvJt * lambda * u;  // J# u
+  return {u.dot(lambda * u), joint_per_u.dot(model.parameters().viscous_friction.cwiseProduct(joint_per_u)),
+          model.parameters().coulomb_friction.dot(joint_per_u.cwiseAbs())};
+}
+}  // namespace
+
 PalpationCase runPalpation(const Rhi4Model& model, FmeEllipsoidMode mode, const PalpationSetup& setup, int trials) {
   PalpationCase pc;
   pc.name = mode == FmeEllipsoidMode::kStiff ? "stiff" : "free";
@@ -215,9 +232,27 @@ PalpationCase runPalpation(const Rhi4Model& model, FmeEllipsoidMode mode, const 
   // (stiff across u, a soft centring spring along u so the arm oscillates about x0 instead of
   // drifting) excites a, v and sign(v) independently. F is the measured external force along u
   // (excitation + guide, the force sensor's reading), samples within 2 cm of x0.
+  // The FME gradient is paused (beta = 0; K_d and the joint-limit terms stay) once the arm has
+  // settled: with it running, the self-motion follows x with the lag of the null-space dynamics,
+  // which along u acts as a delayed position feedback, F ~ k x(t - tau) ~ k x - k tau v, i.e. a
+  // negative damping of the closed loop larger than the (assumed, small) joint friction. The fit
+  // then returned Phi = -0.18 (free) and 0.06 (stiff) N s/m against a reflected joint friction of
+  // 0.09 and 0.20, more negative with slower excitation (0.4/1.1 Hz: -0.39), and close to it with
+  // beta = 0 (0.071 vs 0.075 free). The paper's numbers are of the configuration, which is what a
+  // paused gradient measures.
   const Mat2 across = Mat2::Identity() - setup.u * setup.u.transpose();
   std::vector<MotionForceSample> data;
   ClosedLoop id = settledLoop(model, options, setup, setup.x0, setup.settle_time);
+  {
+    auto paused = options;
+    paused.beta = 0.0;
+    if (id.controller().setOptions(paused) != Fault::kNone) throw Error("palpation: cannot pause the FME gradient");
+  }
+  // The model's values along u, averaged over the samples (the paused self-motion drifts slowly
+  // under K_d alone: 0.1-0.2 rad over the trials).
+  double inertia_sum = 0.0, friction_sum = 0.0, coulomb_sum = 0.0;
+  Mat<2, 4> Js;
+  Mat<4, 4> Ms;
   EndEffectorLoad guide;
   guide.anchor = setup.x0;
   guide.stiffness = 5000.0 * across + 100.0 * setup.u * setup.u.transpose();
@@ -240,20 +275,18 @@ PalpationCase runPalpation(const Rhi4Model& model, FmeEllipsoidMode mode, const 
                                   dev.externalForce().dot(setup.u)};
       trial.samples.push_back({xu, smp.velocity, smp.acceleration, smp.force});
       data.push_back(smp);
+      const ReflectedAlong r = reflectedAlong(model, dev.position(), setup.u, Js, Ms);
+      inertia_sum += r.inertia;
+      friction_sum += r.viscous;
+      coulomb_sum += r.coulomb;
     }
     pc.trials.push_back(std::move(trial));
   }
-  // The model's own values at the matched configuration, for a guided motion along u: inertia
-  // u^T Lambda u, reflected joint viscous friction u^T J#^T B J# u and Coulomb sum_i c_i |(J# u)_i|.
-  {
-    Mat<4, 4> Mq;
-    model.massMatrix(pc.q_settled, Mq);
-    const Mat<4, 2> MinvJt = Mq.llt().solve(J.transpose());
-    const Mat2 lambda = (J * MinvJt).inverse();
-    const Vec4 joint_per_u = MinvJt * lambda * setup.u;  // J# u
-    pc.inertia_model = setup.u.dot(lambda * setup.u);
-    pc.friction_model = joint_per_u.dot(model.parameters().viscous_friction.cwiseProduct(joint_per_u));
-    pc.coulomb_model = model.parameters().coulomb_friction.dot(joint_per_u.cwiseAbs());
+  if (!data.empty()) {
+    const double n = static_cast<double>(data.size());
+    pc.inertia_model = inertia_sum / n;
+    pc.friction_model = friction_sum / n;
+    pc.coulomb_model = coulomb_sum / n;
   }
   // 1 cm/s dead band: joint speeds of ~0.05 rad/s and more, ten times the simulated Coulomb
   // smoothing velocity, where tanh(.) is sign(.) to 1e-8.

@@ -108,7 +108,8 @@ struct PalpationCase {
   double limit_distance = 0.0;  // closest approach to a joint limit, settling and push [rad] (< 0: violated)
   double capability = 0.0;  // static maximum force along u at q_settled [N]
   double peak_force = 0.0;  // largest rendered force along u during the push [N]
-  double inertia_model = 0.0;  // u^T Lambda u at the identification point (guided along u) [kg]
+  // The model's values along u (guided motion), averaged over the identification samples:
+  double inertia_model = 0.0;  // u^T Lambda u [kg]
   double friction_model = 0.0; // u^T J#^T B J# u, joint viscous friction reflected along u [N s/m]
   double coulomb_model = 0.0;  // sum_i c_i |(J# u)_i|, joint Coulomb friction reflected along u [N]
   double inertia_identified = 0.0;  // least squares [kg]
