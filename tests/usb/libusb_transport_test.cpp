@@ -78,7 +78,7 @@ TEST_CASE("the shipped udev rule covers every device's vendor/product id", "[usb
   const std::string rules = readFile(kUdevRule);
   REQUIRE_FALSE(rules.empty());
   for (const auto type : {wire::DeviceType::kExoFinger, wire::DeviceType::kTau, wire::DeviceType::kRhiPlanar}) {
-    const DeviceDescriptor d = boardDefaults(type).descriptor;
+    const DeviceDescriptor d = boardSpec(type, UHAPTICS_PARAMS_DIR).descriptor;
     char line[96];
     std::snprintf(line, sizeof line, "ATTRS{idVendor}==\"%04x\", ATTRS{idProduct}==\"%04x\"", d.vendor_id,
                   d.product_id);

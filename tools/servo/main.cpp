@@ -21,10 +21,10 @@
 
 #include "uhaptics/backends/board_catalog.hpp"
 #include "uhaptics/backends/board_emulator.hpp"
+#include "uhaptics/backends/device_plants.hpp"
 #include "uhaptics/backends/libusb_transport.hpp"
 #include "uhaptics/backends/servo_loop.hpp"
 #include "uhaptics/core/fault.hpp"
-#include "uhaptics/models/param_file.hpp"
 #include "uhaptics/tools/csv.hpp"
 #include "uhaptics/tools/plot.hpp"
 #include "uhaptics/tools/reproduction.hpp"
@@ -49,29 +49,27 @@ int main(int argc, char** argv) {
   CLI11_PARSE(app, argc, argv);
 
   try {
-    const BoardDefaults defaults = boardDefaults(deviceTypeFromName(device_name));
-    DeviceDescriptor device = defaults.descriptor;
-    if (!params.empty()) {
-      const ParamFile file = ParamFile::load(params);
-      device = DeviceDescriptor::fromParams(file, device.type, device.name, device.joints, device.actuators,
-                                            device.effort_limit.data());
-    }
+    const wire::DeviceType type = deviceTypeFromName(device_name);
+    const BoardSpec spec = params.empty() ? boardSpec(type, UHAPTICS_PARAMS_DIR) : boardSpecFromFile(type, params);
+    const DeviceDescriptor& device = spec.descriptor;
     ServoConfig cfg;
-    cfg.rate_hz = rate > 0.0 ? rate : defaults.servo_rate_hz;
+    cfg.rate_hz = rate > 0.0 ? rate : spec.servo_rate_hz;
+    cfg.board_watchdog_us = spec.board_watchdog_us;
     cfg.realtime = realtime;
     cfg.watchdog_periods = watchdog_periods;
 
-    // The emulated board runs a mass-spring-damper per actuator; the hardware path needs no plant.
-    LinearTestPlant plant(LinearTestPlant::Params{device.joints, device.actuators});
+    // The emulated board drives the device's own simulation; the hardware path needs no plant.
+    std::unique_ptr<BoardPlant> plant;
     std::unique_ptr<Transport> transport;
     if (usb) {
       transport = std::make_unique<LibusbTransport>(device);
     } else {
+      plant = makeDevicePlant(type, UHAPTICS_PARAMS_DIR);
       BoardEmulator::Config board;
       board.device = device.type;
-      board.sample_rate_hz = defaults.sample_rate_hz;
+      board.sample_rate_hz = spec.sample_rate_hz;
       board.effort_limit = device.effort_limit;
-      transport = std::make_unique<BoardEmulator>(board, plant);
+      transport = std::make_unique<BoardEmulator>(board, *plant);
     }
     ServoLoop loop(device, *transport, cfg);
     const wire::DeviceInfo info = loop.connect();

@@ -1,0 +1,85 @@
+#pragma once
+// A device's joint I/O, whatever is behind it: the factory gives, for a device name and a backend,
+//
+//   "sim"       the device's simulated backend (device_plants.hpp), stepped by the caller;
+//   "emulated"  the same simulation behind the in-process board emulator, reached through the wire
+//               protocol by the real-time servo loop (the whole hardware path without hardware);
+//   "usb"       the device's controller board over libusb-1.0 and the servo loop.
+//
+// so a device class (e.g. the CHAI3D adapters) reads joints and writes efforts the same way for all
+// three. Every effort passes the servo loop's safety stage (finite, scaled into the device's limits)
+// before it reaches the device; the sim backend applies the same stage itself.
+//
+//   auto io = makeJointIo("tau", "usb", options);  // checks names and the parameter file
+//   io->open();        // throws Error: no device found (and what was found), permission, version...
+//   io->read(q); io->command(tau); io->advance(dt);  // per servo period, noexcept, no allocation
+//   io->close();       // zero effort, stop, release (also in the destructor)
+//
+// read/command/advance belong to one thread (the caller's servo or haptic thread).
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "uhaptics/backends/board_catalog.hpp"
+#include "uhaptics/backends/servo_loop.hpp"
+
+namespace uhaptics {
+
+struct JointIoOptions {
+  std::string params_dir;     // folder of the device parameter files (required)
+  std::string params_file;    // overrides <params_dir>/<device file> (e.g. a lab's own USB ids)
+  /// Servo loop settings (emulated, usb). rate_hz and board_watchdog_us of 0 take the file's values.
+  ServoConfig servo = defaultServo();
+  ServoRenderer* renderer = nullptr;  // optional, runs in the servo thread (emulated, usb)
+
+  static ServoConfig defaultServo() {
+    ServoConfig c;
+    c.rate_hz = 0.0;
+    return c;
+  }
+};
+
+class JointIo {
+ public:
+  virtual ~JointIo() = default;
+  JointIo(const JointIo&) = delete;
+  JointIo& operator=(const JointIo&) = delete;
+
+  /// Connects (emulated/usb: find the board, handshake, start the servo thread). Throws Error with
+  /// what to do; after a failure nothing runs and nothing is commanded.
+  virtual void open() = 0;
+  /// Zero effort, stop, release. Idempotent, never throws.
+  virtual void close() noexcept = 0;
+  virtual bool isOpen() const noexcept = 0;
+
+  /// Newest joint positions (spec().descriptor.joints values). False when there is no valid
+  /// reading: not open, link down, or the host watchdog holds the device at zero.
+  virtual bool read(double* positions) noexcept = 0;
+  /// Efforts (spec().descriptor.actuators values), held until the next call.
+  virtual void command(const double* efforts) noexcept = 0;
+  /// sim: advances the simulation by dt. emulated/usb: nothing (the device runs on its own clock).
+  virtual void advance(double dt) noexcept = 0;
+
+  /// The servo loop behind emulated/usb (statistics, events); nullptr for sim or while closed.
+  virtual ServoLoop* servoLoop() noexcept { return nullptr; }
+  const BoardSpec& spec() const noexcept { return spec_; }
+  const std::string& backend() const noexcept { return backend_; }
+  /// e.g. "TAU, sim" or "TAU, usb 1209:0002 bus 1 addr 7".
+  virtual std::string describe() const = 0;
+
+ protected:
+  JointIo(BoardSpec spec, std::string backend) : spec_(std::move(spec)), backend_(std::move(backend)) {}
+
+ private:
+  BoardSpec spec_;
+  std::string backend_;
+};
+
+/// Backends the factory offers, in the order to list them.
+std::vector<std::string> jointIoBackends();
+/// Device "exo", "tau" or "rhi"; backend one of jointIoBackends(). Loads and validates the device's
+/// parameter file; throws Error naming the valid choices for an unknown device or backend.
+std::unique_ptr<JointIo> makeJointIo(const std::string& device, const std::string& backend,
+                                     const JointIoOptions& options);
+
+}  // namespace uhaptics

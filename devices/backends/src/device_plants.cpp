@@ -1,0 +1,121 @@
+#include "uhaptics/backends/device_plants.hpp"
+
+#include <cmath>
+
+#include "uhaptics/core/fault.hpp"
+
+namespace uhaptics {
+
+FixedStepClock::FixedStepClock(double period) : period_(period) {
+  if (!(period > 0.0) || !std::isfinite(period)) throw Error("FixedStepClock: the period must be finite and > 0");
+}
+
+long FixedStepClock::take(double dt) noexcept {
+  if (!(dt > 0.0) || !std::isfinite(dt)) return 0;
+  pending_ += dt;
+  const double steps = std::floor(pending_ / period_);
+  pending_ -= steps * period_;
+  return static_cast<long>(steps);
+}
+
+// ---- finger exoskeleton ----------------------------------------------------------------------
+
+ExoFingerBoardPlant::ExoFingerBoardPlant(ExoFingerModel model, const Options& options)
+    : model_(std::make_unique<const ExoFingerModel>(std::move(model))),
+      sim_(*model_,
+           FingerTrajectory::synthesized(*model_, options.duration_s, options.flexion_period_s,
+                                         options.trajectory_rate_hz),
+           ExoFingerSimOptions{options.sample_rate_hz, true}),
+      clock_(1.0 / options.sample_rate_hz) {}
+
+void ExoFingerBoardPlant::readJoints(double* positions) noexcept {
+  const ExoFingerState& s = sim_.state();
+  positions[0] = s.q(0);
+  positions[1] = s.q(1);
+}
+
+void ExoFingerBoardPlant::applyCommand(const double* efforts) noexcept {
+  sim_.command(ExoFingerModel::ActuatorVector::Constant(efforts[0]));
+}
+
+void ExoFingerBoardPlant::advance(double dt) noexcept {
+  for (long n = clock_.take(dt); n > 0; --n) sim_.step();
+}
+
+// ---- TAU ------------------------------------------------------------------------------------
+
+namespace {
+SimulatedTauOptions tauOptions(const TauBoardPlant::Options& o) {
+  SimulatedTauOptions s;
+  s.hand = o.hand;
+  s.quantize = o.quantize;
+  return s;
+}
+}  // namespace
+
+TauBoardPlant::TauBoardPlant(TauModel model, const Options& options)
+    : model_(std::make_unique<const TauModel>(std::move(model))),
+      sim_(*model_, tauOptions(options)),
+      clock_(model_->servoPeriod()) {
+  sim_.reset(model_->homeJoints());
+  sim_.setHand(model_->homePose().head<3>(), Vec3::Zero(), Vec3::Zero());
+}
+
+void TauBoardPlant::readJoints(double* positions) noexcept {
+  const Vec6& q = sim_.encoderReading();
+  for (int i = 0; i < 6; ++i) positions[i] = q(i);
+}
+
+void TauBoardPlant::applyCommand(const double* efforts) noexcept {
+  for (int i = 0; i < 6; ++i) command_(i) = efforts[i];
+}
+
+void TauBoardPlant::advance(double dt) noexcept {
+  for (long n = clock_.take(dt); n > 0; --n)
+    if (sim_.step(command_, Vec3::Zero()) != Fault::kNone) ++faults_;
+}
+
+// ---- RHI planar -----------------------------------------------------------------------------
+
+RhiBoardPlant::RhiBoardPlant(Rhi4Model model, const Options& options)
+    : sim_(std::move(model), options.substep), clock_(options.substep) {
+  if (!(options.hand_stiffness >= 0.0) || !(options.hand_damping >= 0.0))
+    throw Error("RhiBoardPlant: hand stiffness and damping must be >= 0");
+  EndEffectorLoad hand;
+  hand.anchor = sim_.endEffectorPosition();
+  hand.stiffness = options.hand_stiffness * Mat2::Identity();
+  hand.damping = options.hand_damping * Mat2::Identity();
+  sim_.setLoad(hand);
+}
+
+void RhiBoardPlant::readJoints(double* positions) noexcept {
+  const Vec<4>& q = sim_.position();
+  for (int i = 0; i < 4; ++i) positions[i] = q(i);
+}
+
+void RhiBoardPlant::applyCommand(const double* efforts) noexcept {
+  for (int i = 0; i < 4; ++i) command_(i) = efforts[i];
+}
+
+void RhiBoardPlant::advance(double dt) noexcept {
+  const long n = clock_.take(dt);
+  if (n > 0) sim_.step(command_, static_cast<double>(n) * clock_.period());
+}
+
+std::unique_ptr<BoardPlant> makeDevicePlant(wire::DeviceType type, const std::string& params_dir) {
+  switch (type) {
+    case wire::DeviceType::kExoFinger:
+      return std::make_unique<ExoFingerBoardPlant>(ExoFingerModel::load(ExoFingerModel::defaultParamsPath(params_dir)),
+                                                   ExoFingerBoardPlant::Options{});
+    case wire::DeviceType::kTau:
+      return std::make_unique<TauBoardPlant>(TauModel::load(params_dir + "/tau.json"), TauBoardPlant::Options{});
+    case wire::DeviceType::kRhiPlanar:
+      return std::make_unique<RhiBoardPlant>(Rhi4Model::fromFile(params_dir + "/rhi4.json", "rhi4"),
+                                             RhiBoardPlant::Options{});
+    case wire::DeviceType::kTestPlant:
+      break;
+  }
+  throw Error("makeDevicePlant: the test plant is not a device (use LinearTestPlant)");
+}
+
+}  // namespace uhaptics

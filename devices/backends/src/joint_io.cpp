@@ -1,0 +1,147 @@
+#include "uhaptics/backends/joint_io.hpp"
+
+#include <algorithm>
+#include <array>
+
+#include "uhaptics/backends/board_emulator.hpp"
+#include "uhaptics/backends/device_plants.hpp"
+#include "uhaptics/backends/libusb_transport.hpp"
+#include "uhaptics/core/fault.hpp"
+
+namespace uhaptics {
+namespace {
+
+using Channels = std::array<double, wire::kMaxChannels>;
+
+// "sim": the simulated device stepped by the caller; commands pass the same safety stage as the
+// servo loop's, so a renderer behaves identically on every backend.
+class SimJointIo final : public JointIo {
+ public:
+  SimJointIo(BoardSpec spec, std::string params_dir) : JointIo(std::move(spec), "sim"), params_dir_(std::move(params_dir)) {}
+
+  void open() override {
+    if (plant_) return;
+    plant_ = makeDevicePlant(spec().descriptor.type, params_dir_);
+  }
+  void close() noexcept override {
+    if (!plant_) return;
+    const Channels zero{};
+    plant_->applyCommand(zero.data());
+    plant_.reset();
+  }
+  bool isOpen() const noexcept override { return plant_ != nullptr; }
+
+  bool read(double* positions) noexcept override {
+    if (!plant_) return false;
+    plant_->readJoints(positions);
+    return true;
+  }
+  void command(const double* efforts) noexcept override {
+    if (!plant_) return;
+    const DeviceDescriptor& d = spec().descriptor;
+    Channels u{};
+    std::copy(efforts, efforts + d.actuators, u.begin());
+    enforceEffortLimits(u.data(), d.actuators, d.effort_limit.data());
+    plant_->applyCommand(u.data());
+  }
+  void advance(double dt) noexcept override {
+    if (plant_) plant_->advance(dt);
+  }
+  std::string describe() const override { return spec().descriptor.name + ", sim"; }
+
+ private:
+  std::string params_dir_;
+  std::unique_ptr<BoardPlant> plant_;
+};
+
+// "emulated" and "usb": a transport to a board and the real-time servo loop on it.
+class ServoJointIo final : public JointIo {
+ public:
+  ServoJointIo(BoardSpec spec, std::string backend, std::string params_dir, ServoConfig servo, ServoRenderer* renderer)
+      : JointIo(std::move(spec), std::move(backend)), params_dir_(std::move(params_dir)), servo_(servo), renderer_(renderer) {
+    if (servo_.rate_hz == 0.0) servo_.rate_hz = this->spec().servo_rate_hz;
+    if (servo_.board_watchdog_us == 0) servo_.board_watchdog_us = this->spec().board_watchdog_us;
+    servo_.validate();
+  }
+  ~ServoJointIo() override { close(); }
+
+  void open() override {
+    if (loop_) return;
+    const DeviceDescriptor& d = spec().descriptor;
+    try {
+      if (backend() == "usb") {
+        transport_ = std::make_unique<LibusbTransport>(d);  // throws: no device found (lists what was)
+      } else {
+        plant_ = makeDevicePlant(d.type, params_dir_);
+        BoardEmulator::Config board;
+        board.device = d.type;
+        board.sample_rate_hz = spec().sample_rate_hz;
+        board.effort_limit = d.effort_limit;
+        transport_ = std::make_unique<BoardEmulator>(board, *plant_);
+      }
+      loop_ = std::make_unique<ServoLoop>(d, *transport_, servo_, renderer_);
+      loop_->connect();
+      loop_->start();
+    } catch (...) {
+      close();  // nothing half-open: no thread, no claimed interface, nothing commanded
+      throw;
+    }
+  }
+  void close() noexcept override {
+    if (loop_) loop_->stop();  // commands zero before the thread ends
+    loop_.reset();
+    transport_.reset();
+    plant_.reset();
+    have_state_ = false;
+  }
+  bool isOpen() const noexcept override { return loop_ != nullptr; }
+
+  bool read(double* positions) noexcept override {
+    if (!loop_) return false;
+    if (loop_->latest(snapshot_)) have_state_ = true;
+    if (!have_state_ || snapshot_.link != LinkState::kRunning || snapshot_.host_watchdog_tripped) return false;
+    std::copy(snapshot_.position.begin(), snapshot_.position.begin() + snapshot_.joints, positions);
+    return true;
+  }
+  void command(const double* efforts) noexcept override {
+    if (!loop_) return;
+    EffortRequest r;
+    r.count = spec().descriptor.actuators;
+    std::copy(efforts, efforts + r.count, r.effort.begin());
+    loop_->request(r);  // the servo loop's safety stage checks it before it leaves the host
+  }
+  void advance(double) noexcept override {}
+  ServoLoop* servoLoop() noexcept override { return loop_.get(); }
+  std::string describe() const override {
+    return spec().descriptor.name + ", " + backend() + (transport_ ? std::string(" (") + transport_->describe() + ")" : "");
+  }
+
+ private:
+  std::string params_dir_;
+  ServoConfig servo_;
+  ServoRenderer* renderer_;
+  std::unique_ptr<BoardPlant> plant_;
+  std::unique_ptr<Transport> transport_;
+  std::unique_ptr<ServoLoop> loop_;
+  DeviceSnapshot snapshot_;
+  bool have_state_ = false;
+};
+
+}  // namespace
+
+std::vector<std::string> jointIoBackends() { return {"sim", "emulated", "usb"}; }
+
+std::unique_ptr<JointIo> makeJointIo(const std::string& device, const std::string& backend,
+                                     const JointIoOptions& options) {
+  const wire::DeviceType type = deviceTypeFromName(device);
+  const auto backends = jointIoBackends();
+  if (std::find(backends.begin(), backends.end(), backend) == backends.end())
+    throw Error("unknown backend '" + backend + "' for device '" + device + "': use sim, emulated or usb");
+  if (options.params_dir.empty()) throw Error("makeJointIo: params_dir is required (the device parameter files)");
+  BoardSpec spec = options.params_file.empty() ? boardSpec(type, options.params_dir)
+                                               : boardSpecFromFile(type, options.params_file);
+  if (backend == "sim") return std::make_unique<SimJointIo>(std::move(spec), options.params_dir);
+  return std::make_unique<ServoJointIo>(std::move(spec), backend, options.params_dir, options.servo, options.renderer);
+}
+
+}  // namespace uhaptics

@@ -1,0 +1,189 @@
+// The backend factory: one joint I/O for every device and backend (sim, emulated, usb), driven the
+// same way by the device's renderer; "usb" without a board fails at open() with an actionable
+// message and leaves nothing running.
+#include <catch2/catch.hpp>
+
+#include <array>
+#include <chrono>
+#include <cmath>
+#include <iostream>
+#include <thread>
+
+#include "servo_rig.hpp"
+#include "uhaptics/backends/joint_io.hpp"
+#include "uhaptics/backends/libusb_transport.hpp"
+#include "uhaptics/core/fault.hpp"
+
+using namespace uhaptics;
+using namespace uhaptics::testing;
+
+namespace {
+
+const char* deviceName(wire::DeviceType type) {
+  switch (type) {
+    case wire::DeviceType::kExoFinger: return "exo";
+    case wire::DeviceType::kTau: return "tau";
+    case wire::DeviceType::kRhiPlanar: return "rhi";
+    case wire::DeviceType::kTestPlant: break;
+  }
+  return "";
+}
+
+JointIoOptions options() {
+  JointIoOptions o;
+  o.params_dir = kParamsDir;
+  o.servo.realtime = false;
+  o.servo.watchdog_periods = 50;  // the emulated run is threaded: a loaded machine must not trip it
+  return o;
+}
+
+// Renders from a joint reading the way the servo loop would (positions + board time).
+struct Driver {
+  std::unique_ptr<DeviceServoRenderer> renderer;
+  DeviceSnapshot snapshot;
+  std::array<double, wire::kMaxChannels> efforts{};
+  explicit Driver(const DeviceCase& c) : renderer(makeDeviceRenderer(c.type)) {
+    snapshot.joints = c.device().joints;
+    snapshot.actuators = c.actuators();
+  }
+  const double* render(const double* q, double t) {
+    for (int i = 0; i < snapshot.joints; ++i) {
+      snapshot.position[i] = q[i];
+      snapshot.sample_time_us[i] = static_cast<std::uint32_t>(std::llround(t * 1e6));
+    }
+    snapshot.board_time_us = static_cast<std::uint32_t>(std::llround(t * 1e6));
+    efforts.fill(0.0);
+    renderer->render(snapshot, EffortRequest{}, efforts.data());
+    return efforts.data();
+  }
+};
+
+}  // namespace
+
+TEST_CASE("joint I/O factory: names, backends and parameter files are checked", "[servo][jointio]") {
+  CHECK(jointIoBackends() == std::vector<std::string>{"sim", "emulated", "usb"});
+  CHECK_THROWS_WITH(makeJointIo("phantom", "sim", options()), Catch::Contains("use exo, tau or rhi"));
+  CHECK_THROWS_WITH(makeJointIo("tau", "serial", options()), Catch::Contains("use sim, emulated or usb"));
+  JointIoOptions missing = options();
+  missing.params_dir = "/nonexistent";
+  CHECK_THROWS_AS(makeJointIo("tau", "sim", missing), Error);
+  for (const DeviceCase& c : allDevices()) {
+    const auto io = makeJointIo(deviceName(c.type), "sim", options());
+    CHECK(io->spec().descriptor.product_id == c.device().product_id);
+    CHECK(io->spec().descriptor.joints == c.device().joints);
+    CHECK_FALSE(io->isOpen());
+    double q[wire::kMaxChannels];
+    CHECK_FALSE(io->read(q));  // nothing before open()
+  }
+}
+
+TEST_CASE("joint I/O, sim: each device's renderer drives its simulation, commands held to the limits",
+          "[servo][jointio]") {
+  for (const DeviceCase& c : allDevices()) {
+    INFO(c.name());
+    const auto io = makeJointIo(deviceName(c.type), "sim", options());
+    io->open();
+    REQUIRE(io->isOpen());
+    CHECK(io->describe() == c.name() + ", sim");
+    Driver driver(c);
+    double q[wire::kMaxChannels], q0[wire::kMaxChannels];
+    REQUIRE(io->read(q0));
+    const double dt = 1e-3;
+    double largest_command = 0.0;
+    bool finite = true;
+    for (int k = 0; k < 2000; ++k) {
+      REQUIRE(io->read(q));
+      const double* u = driver.render(q, k * dt);
+      for (int i = 0; i < c.actuators(); ++i) {
+        finite = finite && std::isfinite(u[i]);
+        largest_command = std::max(largest_command, std::abs(u[i]) / c.limit(i));
+      }
+      io->command(u);
+      io->advance(dt);
+    }
+    REQUIRE(io->read(q));
+    double drift = 0.0;
+    for (int i = 0; i < c.device().joints; ++i) drift = std::max(drift, std::abs(q[i] - q0[i]));
+    std::cout << c.name() << " (sim, 2 s through its renderer): largest |command| / limit " << largest_command
+              << ", largest joint change " << drift << "\n";
+    CHECK(finite);
+    CHECK(driver.renderer->faults() == 0);
+    CHECK(largest_command <= 1.0);
+    CHECK(largest_command > 0.0);
+    // The safety stage of the sim path: 10x the limit arrives scaled into the box.
+    std::array<double, wire::kMaxChannels> over{};
+    for (int i = 0; i < c.actuators(); ++i) over[i] = 10.0 * c.limit(i);
+    io->command(over.data());
+    io->advance(dt);
+    io->close();
+    CHECK_FALSE(io->isOpen());
+    CHECK_FALSE(io->read(q));
+  }
+}
+
+TEST_CASE("joint I/O, emulated: the same renderer through the servo loop and the board emulator",
+          "[servo][jointio]") {
+  for (const DeviceCase& c : allDevices()) {
+    INFO(c.name());
+    auto renderer = makeDeviceRenderer(c.type);
+    JointIoOptions o = options();
+    o.renderer = renderer.get();
+    const auto io = makeJointIo(deviceName(c.type), "emulated", o);
+    io->open();
+    REQUIRE(io->isOpen());
+    REQUIRE(io->servoLoop() != nullptr);
+    CHECK(io->describe().find("in-process board emulator") != std::string::npos);
+    double q[wire::kMaxChannels];
+    bool got = false;
+    for (int k = 0; k < 300 && !got; ++k) {
+      got = io->read(q);
+      std::this_thread::sleep_for(std::chrono::milliseconds(1));
+    }
+    REQUIRE(got);
+    std::this_thread::sleep_for(std::chrono::milliseconds(200));
+    const ServoCounters k = io->servoLoop()->counters();
+    CHECK(k.ticks > 50);
+    CHECK(k.frames_lost == 0);
+    CHECK(k.host_watchdog_trips == 0);
+    CHECK(renderer->faults() == 0);
+    io->close();
+    CHECK_FALSE(io->isOpen());
+    CHECK(io->servoLoop() == nullptr);
+  }
+}
+
+TEST_CASE("joint I/O, usb without a board: open() fails saying what was found, nothing runs", "[servo][jointio]") {
+  const bool board_present = [] {
+    for (const auto& line : LibusbTransport::listDevices())
+      if (line.find("1209:000") != std::string::npos) return true;
+    return false;
+  }();
+  if (board_present) {
+    WARN("a uhaptics board is attached: skipping the no-board check");
+    return;
+  }
+  for (const DeviceCase& c : allDevices()) {
+    INFO(c.name());
+    const auto io = makeJointIo(deviceName(c.type), "usb", options());
+    try {
+      io->open();
+      FAIL("open() succeeded without a board");
+    } catch (const Error& e) {
+      const std::string m = e.what();
+      char ids[16];
+      std::snprintf(ids, sizeof ids, "%04x:%04x", c.device().vendor_id, c.device().product_id);
+      INFO(m);
+      // "no device found (list what was found)", or libusb cannot see a bus at all.
+      const bool absent = m.find(std::string("no USB device ") + ids) != std::string::npos &&
+                          m.find("USB devices present:") != std::string::npos;
+      CHECK((absent || m.find("libusb_init failed") != std::string::npos));
+    }
+    CHECK_FALSE(io->isOpen());
+    CHECK(io->servoLoop() == nullptr);
+    double q[wire::kMaxChannels];
+    CHECK_FALSE(io->read(q));
+    const std::array<double, wire::kMaxChannels> u{};
+    io->command(u.data());  // harmless on a closed device
+    io->close();
+  }
+}
