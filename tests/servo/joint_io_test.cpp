@@ -135,17 +135,24 @@ TEST_CASE("joint I/O, emulated: the same renderer through the servo loop and the
     CHECK(io->describe().find("in-process board emulator") != std::string::npos);
     double q[wire::kMaxChannels];
     bool got = false;
-    for (int k = 0; k < 300 && !got; ++k) {
+    for (int k = 0; k < 5000 && !got; ++k) {  // the first STATE: milliseconds, seconds when sanitized
       got = io->read(q);
       std::this_thread::sleep_for(std::chrono::milliseconds(1));
     }
     REQUIRE(got);
-    std::this_thread::sleep_for(std::chrono::milliseconds(200));
+    // 100 periods of the servo thread (a few seconds at most, even in a sanitizer build).
+    const auto t0 = std::chrono::steady_clock::now();
+    while (io->servoLoop()->counters().ticks < 100 && std::chrono::steady_clock::now() - t0 < std::chrono::seconds(10))
+      std::this_thread::sleep_for(std::chrono::milliseconds(5));
+    io->servoLoop()->stop();  // counters and the renderer's fault count are final
     const ServoCounters k = io->servoLoop()->counters();
-    CHECK(k.ticks > 50);
+    CHECK(k.ticks >= 100);
     CHECK(k.frames_lost == 0);
-    CHECK(k.host_watchdog_trips == 0);
-    CHECK(renderer->faults() == 0);
+    CHECK(k.frames_rejected == 0);
+    if (kRealTimeBounds) {
+      CHECK(k.host_watchdog_trips == 0);
+      CHECK(renderer->faults() == 0);
+    }
     io->close();
     CHECK_FALSE(io->isOpen());
     CHECK(io->servoLoop() == nullptr);

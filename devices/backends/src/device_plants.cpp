@@ -6,8 +6,10 @@
 
 namespace uhaptics {
 
-FixedStepClock::FixedStepClock(double period) : period_(period) {
-  if (!(period > 0.0) || !std::isfinite(period)) throw Error("FixedStepClock: the period must be finite and > 0");
+FixedStepClock::FixedStepClock(double period, double max_catch_up) : period_(period) {
+  if (!(period > 0.0) || !std::isfinite(period) || !(max_catch_up >= period) || !std::isfinite(max_catch_up))
+    throw Error("FixedStepClock: the period must be finite and > 0, the catch-up limit at least one period");
+  max_steps_ = static_cast<long>(std::floor(max_catch_up / period));
 }
 
 long FixedStepClock::take(double dt) noexcept {
@@ -15,6 +17,10 @@ long FixedStepClock::take(double dt) noexcept {
   pending_ += dt;
   const double steps = std::floor(pending_ / period_);
   pending_ -= steps * period_;
+  if (steps > static_cast<double>(max_steps_)) {
+    dropped_ += (steps - static_cast<double>(max_steps_)) * period_;
+    return max_steps_;
+  }
   return static_cast<long>(steps);
 }
 

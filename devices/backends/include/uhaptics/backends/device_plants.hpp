@@ -27,18 +27,25 @@
 
 namespace uhaptics {
 
-/// Turns an arbitrary elapsed time into whole simulation steps of a fixed period.
+/// Turns an arbitrary elapsed time into whole simulation steps of a fixed period. At most
+/// max_catch_up seconds of simulation are due per call; an older backlog is dropped (the simulated
+/// device then runs behind the wall clock), so a simulation slower than real time (a sanitizer
+/// build, a stalled machine) cannot spiral into ever longer catch-up calls.
 class FixedStepClock {
  public:
-  /// Throws Error unless period is finite and > 0.
-  explicit FixedStepClock(double period);
+  /// Throws Error unless period and max_catch_up are finite and period > 0, max_catch_up >= period.
+  explicit FixedStepClock(double period, double max_catch_up = 0.02);
   /// Adds dt (negative or non-finite dt is ignored) and returns how many whole periods are due.
   long take(double dt) noexcept;
   double period() const noexcept { return period_; }
+  /// Simulation time dropped so far [s].
+  double dropped() const noexcept { return dropped_; }
 
  private:
   double period_;
+  long max_steps_;
   double pending_ = 0.0;
+  double dropped_ = 0.0;
 };
 
 class ExoFingerBoardPlant final : public BoardPlant {
