@@ -41,6 +41,25 @@ struct RenderedRig {
   }
 };
 
+// A fault that starves the host of valid STATEs, injected after a device ran normally: the first
+// bad period is reported (`first_bad`), the 3-period host watchdog trips two periods later, the
+// board drives zero from that period until the loop resumes, and at the end it follows the host
+// again.
+const ServoEvent& expectZeroWithinWatchdog(const Trace& t, ServoEventKind first_bad) {
+  const ServoEvent* bad = find(t.events, first_bad);
+  const ServoEvent* trip = find(t.events, ServoEventKind::kHostWatchdog);
+  const ServoEvent* resumed = find(t.events, ServoEventKind::kResumed);
+  REQUIRE(bad != nullptr);
+  REQUIRE(trip != nullptr);
+  REQUIRE(resumed != nullptr);
+  CHECK(trip->tick - bad->tick == 2);
+  CHECK(t.firstZeroTick() == static_cast<std::int64_t>(trip->tick));
+  CHECK(t.zeroThroughout(trip->tick, resumed->tick - 1));
+  CHECK(t.lastAsSent());
+  CHECK_FALSE(t.zero.back());
+  return *bad;
+}
+
 class SilentTransport final : public Transport {
  public:
   TransportStatus send(const std::uint8_t*, std::size_t, int) noexcept override { return TransportStatus::kOk; }
@@ -135,22 +154,11 @@ TEST_CASE("dropped frames: host watchdog commands zero within its periods, then 
     RenderedRig r(c, handDrivenConfig(c));
     r.rig.board.inject(BoardEmulator::Fault::kDrop, 10);
     const Trace t = run(r.rig, 30, c.actuators());
-    const ServoEvent* missing = find(t.events, ServoEventKind::kStateMissing);
-    const ServoEvent* trip = find(t.events, ServoEventKind::kHostWatchdog);
-    const ServoEvent* resumed = find(t.events, ServoEventKind::kResumed);
-    REQUIRE(missing != nullptr);
-    REQUIRE(trip != nullptr);
-    REQUIRE(resumed != nullptr);
-    // Watchdog of 3 periods: the third period without a STATE sends zero, and zero it stays.
-    CHECK(trip->tick - missing->tick == 2);
-    CHECK(t.firstZeroTick() == static_cast<std::int64_t>(trip->tick));
-    CHECK(t.zeroThroughout(trip->tick, resumed->tick - 1));
+    expectZeroWithinWatchdog(t, ServoEventKind::kStateMissing);
     const ServoEvent* lost = find(t.events, ServoEventKind::kFramesLost);
     REQUIRE(lost != nullptr);
     CHECK(lost->value == 10);
     CHECK(r.rig.loop.counters().frames_lost == 10);
-    CHECK(t.lastAsSent());
-    CHECK_FALSE(t.zero.back());
   }
 }
 
@@ -172,19 +180,12 @@ TEST_CASE("corrupted frames are rejected by CRC, counted, and zero follows", "[s
     RenderedRig r(c, handDrivenConfig(c));
     r.rig.board.inject(BoardEmulator::Fault::kCorrupt, 10);
     const Trace t = run(r.rig, 30, c.actuators());
-    const ServoEvent* rejected = find(t.events, ServoEventKind::kFrameRejected);
-    REQUIRE(rejected != nullptr);
-    CHECK(static_cast<wire::Reject>(rejected->detail) == wire::Reject::kBadCrc);
+    const ServoEvent& rejected = expectZeroWithinWatchdog(t, ServoEventKind::kFrameRejected);
+    CHECK(static_cast<wire::Reject>(rejected.detail) == wire::Reject::kBadCrc);
     const ServoCounters k = r.rig.loop.counters();
     CHECK(k.rejected_by_reason[static_cast<std::size_t>(wire::Reject::kBadCrc)] == 10);
     CHECK(k.frames_rejected == 10);
     CHECK(k.frames_lost == 10);
-    const ServoEvent* trip = find(t.events, ServoEventKind::kHostWatchdog);
-    REQUIRE(trip != nullptr);
-    CHECK(trip->tick - rejected->tick == 2);
-    CHECK(t.firstZeroTick() == static_cast<std::int64_t>(trip->tick));
-    CHECK(t.lastAsSent());
-    CHECK_FALSE(t.zero.back());
   }
 }
 
@@ -209,16 +210,8 @@ TEST_CASE("delayed frames trip the watchdog, the backlog is drained, nothing is 
     RenderedRig r(c, handDrivenConfig(c));
     r.rig.board.inject(BoardEmulator::Fault::kDelay, 3, 6);  // held 6 periods > the 3-period watchdog
     const Trace t = run(r.rig, 40, c.actuators());
-    const ServoEvent* missing = find(t.events, ServoEventKind::kStateMissing);
-    const ServoEvent* trip = find(t.events, ServoEventKind::kHostWatchdog);
-    REQUIRE(missing != nullptr);
-    REQUIRE(trip != nullptr);
-    CHECK(trip->tick - missing->tick == 2);
-    CHECK(t.firstZeroTick() == static_cast<std::int64_t>(trip->tick));
-    CHECK(find(t.events, ServoEventKind::kResumed) != nullptr);
+    expectZeroWithinWatchdog(t, ServoEventKind::kStateMissing);
     CHECK(r.rig.loop.counters().frames_lost == 0);
-    CHECK(t.lastAsSent());
-    CHECK_FALSE(t.zero.back());
   }
 }
 

@@ -6,12 +6,11 @@
 #include <string>
 #include <vector>
 
-#include "device_renderers.hpp"
+#include "device_servo_renderers.hpp"
 #include "uhaptics/backends/board_catalog.hpp"
 #include "uhaptics/backends/board_emulator.hpp"
 #include "uhaptics/backends/device_plants.hpp"
 #include "uhaptics/backends/servo_loop.hpp"
-#include "uhaptics/models/exo_finger_model.hpp"
 
 namespace uhaptics::testing {
 
@@ -42,24 +41,8 @@ inline const std::vector<DeviceCase>& allDevices() {
   return all;
 }
 
-/// The device's renderer on its own copy of the model (the plant owns the simulation's).
 inline std::unique_ptr<DeviceServoRenderer> makeDeviceRenderer(wire::DeviceType type) {
-  switch (type) {
-    case wire::DeviceType::kExoFinger: {
-      static const ExoFingerModel model = ExoFingerModel::load(ExoFingerModel::defaultParamsPath(kParamsDir));
-      return std::make_unique<ExoServoRenderer>(model);
-    }
-    case wire::DeviceType::kTau: {
-      static const TauModel model = TauModel::load(kParamsDir + "/tau.json");
-      return std::make_unique<TauServoRenderer>(model);
-    }
-    case wire::DeviceType::kRhiPlanar: {
-      static const Rhi4Model model = Rhi4Model::fromFile(kParamsDir + "/rhi4.json", "rhi4");
-      return std::make_unique<RhiServoRenderer>(model);
-    }
-    case wire::DeviceType::kTestPlant: break;
-  }
-  return nullptr;
+  return uhaptics::makeDeviceRenderer(type, kParamsDir);
 }
 
 /// Settings for hand-driven ticks: a 3-period host watchdog, quick reconnects, no SCHED_FIFO.

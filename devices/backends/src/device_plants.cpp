@@ -67,15 +67,6 @@ TauBoardPlant::TauBoardPlant(TauModel model, const Options& options)
   sim_.setHand(model_->homePose().head<3>(), Vec3::Zero(), Vec3::Zero());
 }
 
-void TauBoardPlant::readJoints(double* positions) noexcept {
-  const Vec6& q = sim_.encoderReading();
-  for (int i = 0; i < 6; ++i) positions[i] = q(i);
-}
-
-void TauBoardPlant::applyCommand(const double* efforts) noexcept {
-  for (int i = 0; i < 6; ++i) command_(i) = efforts[i];
-}
-
 void TauBoardPlant::advance(double dt) noexcept {
   for (long n = clock_.take(dt); n > 0; --n)
     if (sim_.step(command_, Vec3::Zero()) != Fault::kNone) ++faults_;
@@ -92,15 +83,6 @@ RhiBoardPlant::RhiBoardPlant(Rhi4Model model, const Options& options)
   hand.stiffness = options.hand_stiffness * Mat2::Identity();
   hand.damping = options.hand_damping * Mat2::Identity();
   sim_.setLoad(hand);
-}
-
-void RhiBoardPlant::readJoints(double* positions) noexcept {
-  const Vec<4>& q = sim_.position();
-  for (int i = 0; i < 4; ++i) positions[i] = q(i);
-}
-
-void RhiBoardPlant::applyCommand(const double* efforts) noexcept {
-  for (int i = 0; i < 4; ++i) command_(i) = efforts[i];
 }
 
 void RhiBoardPlant::advance(double dt) noexcept {

@@ -439,17 +439,7 @@ void ServoLoop::computeCommand(bool fresh) noexcept {
   requests_.read(request_);
   std::array<double, wire::kMaxChannels> raw{};
   DeviceSnapshot state;
-  state.tick = tick_;
-  state.link = link_;
-  state.board_status = last_state_.status;
-  state.board_error = last_state_.error;
-  state.board_time_us = last_state_.board_time_us;
-  state.joints = device_.joints;
-  state.actuators = device_.actuators;
-  for (int i = 0; i < device_.joints; ++i) {
-    state.position[i] = static_cast<double>(last_state_.position[i]);
-    state.sample_time_us[i] = last_state_.sample_time_us[i];
-  }
+  fillSnapshot(state);
   if (renderer_ != nullptr) {
     renderer_->render(state, request_, raw.data());
   } else {
@@ -472,8 +462,7 @@ void ServoLoop::computeCommand(bool fresh) noexcept {
   command_ = raw;
 }
 
-void ServoLoop::publish() noexcept {
-  DeviceSnapshot s;
+void ServoLoop::fillSnapshot(DeviceSnapshot& s) const noexcept {
   s.tick = tick_;
   s.link = link_;
   s.host_watchdog_tripped = watchdog_tripped_;
@@ -486,6 +475,11 @@ void ServoLoop::publish() noexcept {
     s.position[i] = static_cast<double>(last_state_.position[i]);
     s.sample_time_us[i] = last_state_.sample_time_us[i];
   }
+}
+
+void ServoLoop::publish() noexcept {
+  DeviceSnapshot s;
+  fillSnapshot(s);
   for (int i = 0; i < device_.actuators; ++i) s.command_sent[i] = watchdog_tripped_ ? 0.0 : command_[i];
   snapshots_.write(s);
 }

@@ -74,18 +74,30 @@ class ExoFingerBoardPlant final : public BoardPlant {
   FixedStepClock clock_;
 };
 
-class TauBoardPlant final : public BoardPlant {
+/// Plants whose joints are all actuated, with the torque held between updates (TAU, RHI).
+template <int N>
+class HeldTorquePlant : public BoardPlant {
+ public:
+  int jointCount() const noexcept override { return N; }
+  int actuatorCount() const noexcept override { return N; }
+  void readJoints(double* positions) noexcept override {
+    Eigen::Map<Vec<N>> out(positions);
+    out = sensed();
+  }
+  void applyCommand(const double* efforts) noexcept override { command_ = Eigen::Map<const Vec<N>>(efforts); }
+
+ protected:
+  virtual const Vec<N>& sensed() const noexcept = 0;
+  Vec<N> command_ = Vec<N>::Zero();
+};
+
+class TauBoardPlant final : public HeldTorquePlant<6> {
  public:
   struct Options {
     HandModel hand;                   // spring-damper holding the tool at the home pose
     bool quantize = true;             // 4096-count encoders
   };
   TauBoardPlant(TauModel model, const Options& options);
-
-  int jointCount() const noexcept override { return 6; }
-  int actuatorCount() const noexcept override { return 6; }
-  void readJoints(double* positions) noexcept override;
-  void applyCommand(const double* efforts) noexcept override;
   void advance(double dt) noexcept override;
 
   const TauModel& model() const noexcept { return *model_; }
@@ -94,14 +106,14 @@ class TauBoardPlant final : public BoardPlant {
   long faults() const noexcept { return faults_; }
 
  private:
+  const Vec6& sensed() const noexcept override { return sim_.encoderReading(); }
   std::unique_ptr<const TauModel> model_;
   SimulatedTau sim_;
   FixedStepClock clock_;
-  Vec6 command_ = Vec6::Zero();
   long faults_ = 0;
 };
 
-class RhiBoardPlant final : public BoardPlant {
+class RhiBoardPlant final : public HeldTorquePlant<4> {
  public:
   struct Options {
     double substep = 1e-4;            // integration step [s]
@@ -109,19 +121,14 @@ class RhiBoardPlant final : public BoardPlant {
     double hand_damping = 8.0;        // [N s/m]
   };
   RhiBoardPlant(Rhi4Model model, const Options& options);
-
-  int jointCount() const noexcept override { return 4; }
-  int actuatorCount() const noexcept override { return 4; }
-  void readJoints(double* positions) noexcept override;
-  void applyCommand(const double* efforts) noexcept override;
   void advance(double dt) noexcept override;
 
   const SimulatedPlanarLinkage<4>& sim() const noexcept { return sim_; }
 
  private:
+  const Vec<4>& sensed() const noexcept override { return sim_.position(); }
   SimulatedPlanarLinkage<4> sim_;
   FixedStepClock clock_;
-  Vec<4> command_ = Vec<4>::Zero();
 };
 
 /// The device's plant with default options, its model loaded from `params_dir` (exo_finger.json,

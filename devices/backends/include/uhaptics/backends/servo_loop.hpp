@@ -160,6 +160,8 @@ class ServoLoop {
   void computeCommand(bool fresh) noexcept;
   void tripWatchdog(ServoEventKind why, double periods) noexcept;
   void onDisconnected() noexcept;
+  /// The state part of a snapshot (what the renderer sees and what the graphics thread gets).
+  void fillSnapshot(DeviceSnapshot& s) const noexcept;
   void publish() noexcept;
   void emit(ServoEventKind kind, std::uint8_t detail = 0, double value = 0.0) noexcept;
   void bump(std::atomic<std::uint64_t>& c, std::uint64_t n = 1) noexcept {
