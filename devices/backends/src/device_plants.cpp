@@ -55,6 +55,7 @@ SimulatedTauOptions tauOptions(const TauBoardPlant::Options& o) {
   SimulatedTauOptions s;
   s.hand = o.hand;
   s.quantize = o.quantize;
+  s.tool_rotational_damping = o.tool_rotational_damping;
   return s;
 }
 }  // namespace
