@@ -30,7 +30,7 @@ std::string describe(const Complex& lambda) {
 MatX normalizedColumns(const MatX& M) {
   MatX out = M;
   for (Eigen::Index j = 0; j < out.cols(); ++j) {
-    const double n = out.col(j).norm();
+    const double n = out.col(j).stableNorm();
     if (n > 0.0) out.col(j) /= n;
   }
   return out;
@@ -45,7 +45,7 @@ bool hautus(const MatX& A, const MatX& X, double rank_tolerance, const char* wha
     if (why) *why = "eigenvalues of A could not be computed";
     return false;
   }
-  const double scale = std::max(1.0, A.norm());
+  const double scale = std::max(1.0, A.stableNorm());
   MatC stacked(n + X.cols(), n);
   for (Eigen::Index k = 0; k < n; ++k) {
     const Complex lambda = eig.eigenvalues()(k);
@@ -101,7 +101,7 @@ double dareRelativeResidual(const MatX& A, const MatX& B, const MatX& Q, const M
   const MatX BtPA = B.transpose() * P * A;
   const MatX S = R + B.transpose() * P * B;
   const MatX rhs = AtPA - BtPA.transpose() * S.ldlt().solve(BtPA) + Q;
-  return (P - rhs).norm() / std::max(Q.norm() + AtPA.norm(), 1e-300);
+  return (P - rhs).stableNorm() / std::max(Q.stableNorm() + AtPA.stableNorm(), 1e-300);
 }
 
 DareResult solveDare(const MatX& A, const MatX& B, const MatX& Q, const MatX& R, const DareOptions& options) {
@@ -116,9 +116,9 @@ DareResult solveDare(const MatX& A, const MatX& B, const MatX& Q, const MatX& R,
   requireFinite(B, "B");
   requireFinite(Q, "Q");
   requireFinite(R, "R");
-  const double q_scale = std::max(Q.norm(), 1e-300);
-  if ((Q - Q.transpose()).norm() > 1e-12 * q_scale) throw Error("DARE: Q is not symmetric");
-  if ((R - R.transpose()).norm() > 1e-12 * std::max(R.norm(), 1e-300)) throw Error("DARE: R is not symmetric");
+  const double q_scale = std::max(Q.stableNorm(), 1e-300);
+  if ((Q - Q.transpose()).stableNorm() > 1e-12 * q_scale) throw Error("DARE: Q is not symmetric");
+  if ((R - R.transpose()).stableNorm() > 1e-12 * std::max(R.stableNorm(), 1e-300)) throw Error("DARE: R is not symmetric");
   Eigen::LLT<MatX> r_llt(R);
   if (r_llt.info() != Eigen::Success) throw Error("DARE: R is not positive definite");
   if (Eigen::SelfAdjointEigenSolver<MatX>(Q, Eigen::EigenvaluesOnly).eigenvalues().minCoeff() < -1e-12 * q_scale)
@@ -150,11 +150,11 @@ DareResult solveDare(const MatX& A, const MatX& B, const MatX& Q, const MatX& R,
     Ak = Ak * V1;
     Gk = 0.5 * (Gnext + Gnext.transpose());
     Hnext = 0.5 * (Hnext + Hnext.transpose());
-    const double change = (Hnext - Hk).norm();
+    const double change = (Hnext - Hk).stableNorm();
     Hk = std::move(Hnext);
     result.iterations = k + 1;
     if (!Hk.allFinite()) break;
-    if (change <= options.tolerance * Hk.norm()) {
+    if (change <= options.tolerance * Hk.stableNorm()) {
       converged = true;
       break;
     }
@@ -182,7 +182,7 @@ DareResult solveDare(const MatX& A, const MatX& B, const MatX& Q, const MatX& R,
   }
   const double p_min =
       Eigen::SelfAdjointEigenSolver<MatX>(result.P, Eigen::EigenvaluesOnly).eigenvalues().minCoeff();
-  if (p_min < -1e-9 * std::max(result.P.norm(), 1.0))
+  if (p_min < -1e-9 * std::max(result.P.stableNorm(), 1.0))
     throw Error("DARE: solution is not positive semidefinite (the pair is not stabilizable or not detectable)");
   const MatX closed = A - B * result.K;
   result.closed_loop_spectral_radius = Eigen::EigenSolver<MatX>(closed, false).eigenvalues().cwiseAbs().maxCoeff();
