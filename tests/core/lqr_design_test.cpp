@@ -1,5 +1,6 @@
 #include "uhaptics/core/lqr_design.hpp"
 
+#include <Eigen/Eigenvalues>
 #include <catch2/catch.hpp>
 #include <cmath>
 
@@ -90,4 +91,77 @@ TEST_CASE("Full LQR-with-integrator design on a scalar mass: gain and fastest po
         designLqrWithIntegrators(bad);
       }(),
       Catch::Contains("Q must be 3x3"));
+}
+
+namespace {
+double spectralRadius(const MatX& A) {
+  return Eigen::EigenSolver<MatX>(A, false).eigenvalues().cwiseAbs().maxCoeff();
+}
+}  // namespace
+
+TEST_CASE("Input-delay augmentation: closed form for a scalar plant and a stable delayed loop") {
+  // x+ = a x + b u_{k-1}: state (x, u_{k-1}), A = [[a, b], [0, 0]], B = [0; 1].
+  const double a = 1.5, b = 1.0;
+  StateSpace plant;
+  plant.A = MatX::Constant(1, 1, a);
+  plant.B = MatX::Constant(1, 1, b);
+  plant.Bref = MatX::Constant(1, 1, 0.25);
+  const StateSpace d = augmentWithInputDelay(plant, 1);
+  MatX A_expected(2, 2), B_expected(2, 1), Bref_expected(2, 1);
+  A_expected << a, b, 0, 0;
+  B_expected << 0, 1;
+  Bref_expected << 0.25, 0;  // the reference is internal to the controller: not delayed
+  CHECK(d.A == A_expected);
+  CHECK(d.B == B_expected);
+  CHECK(d.Bref == Bref_expected);
+
+  // A stiff design (q >> r) on the undelayed plant nearly cancels a: K0 -> a / b. On the true
+  // delayed plant u_k = -K0 x_k gives z^2 - a z + b K0 = 0, whose roots multiply to b K0 ~ 1.5:
+  // unstable. The design on the augmented plant accounts for the sample in flight: stable.
+  const MatX Q = MatX::Constant(1, 1, 1e6), R = MatX::Identity(1, 1);
+  const DareResult undelayed = solveDare(plant.A, plant.B, Q, R);
+  const double K0 = undelayed.K(0, 0);
+  CHECK(K0 == Approx(a / b).epsilon(1e-5));
+  MatX loop_undelayed = d.A;
+  loop_undelayed.row(1) = -K0 * MatX::Identity(1, 2).row(0);  // u_k = -K0 x_k enters the queue
+  CHECK(spectralRadius(loop_undelayed) > 1.2);
+
+  MatX Qa = MatX::Zero(2, 2);
+  Qa(0, 0) = 1e6;  // the command in flight carries no weight of its own
+  const DareResult delayed = solveDare(d.A, d.B, Qa, R);
+  CHECK(spectralRadius(d.A - d.B * delayed.K) < 1.0);
+  // With q >> r the delayed design is deadbeat for x: u_k = -(a^2 x_k + a b u_{k-1}) / b makes
+  // x_{k+2} = 0 (closed form of the one-step predictor a x_k + b u_{k-1} = x_{k+1}).
+  CHECK(delayed.K(0, 0) == Approx(a * a / b).epsilon(1e-5));
+  CHECK(delayed.K(0, 1) == Approx(a).epsilon(1e-5));
+}
+
+TEST_CASE("Input-delay augmentation: shift-register structure for a MIMO plant, D = 0 unchanged") {
+  StateSpace plant;
+  plant.A = MatX::Random(3, 3);
+  plant.B = MatX::Random(3, 2);
+  const StateSpace same = augmentWithInputDelay(plant, 0);
+  CHECK(same.A == plant.A);
+  CHECK(same.B == plant.B);
+  const int D = 3;
+  const StateSpace d = augmentWithInputDelay(plant, D);
+  REQUIRE(d.A.rows() == 3 + D * 2);
+  REQUIRE(d.B.cols() == 2);
+  // Propagate a command pulse: it must reach x exactly D samples later, through B.
+  VecX s = VecX::Zero(3 + D * 2);
+  VecX u(2);
+  u << 1.0, -2.0;
+  s = d.B * u;  // u_0 issued at k = 0
+  for (int k = 1; k < D; ++k) {
+    CHECK(s.head(3).isZero());
+    s = d.A * s;
+  }
+  CHECK(s.head(3).isZero());
+  s = d.A * s;  // the pulse acts over sample D
+  CHECK((s.head(3) - plant.B * u).norm() < 1e-15);
+  CHECK(s.tail(D * 2).isZero());
+  CHECK_THROWS_AS(augmentWithInputDelay(plant, -1), Error);
+  StateSpace bad = plant;
+  bad.B = MatX::Zero(2, 2);
+  CHECK_THROWS_AS(augmentWithInputDelay(bad, 1), Error);
 }

@@ -80,6 +80,15 @@ int main(int argc, char** argv) {
       ->expected(4);
   bool paper_weights = false;
   app.add_flag("--paper-weights", paper_weights, "paper 001's weights Q = diag(I, 1e3 I, 1e7 I), R = I");
+  // 1 sample, not the worst case 3: under a random 0..3 delay the 1-sample design holds the tool on
+  // ideal encoders while the 0- and 3-sample designs lose it (README, TAU section).
+  int delay_design = 1;
+  app.add_option("--delay-design", delay_design,
+                 "command delay (samples) the LQR of the delay variants is designed for (0: the undelayed design)")
+      ->check(CLI::Range(0, kMaxCommandDelay));
+  std::vector<double> delay_weight_list;
+  app.add_option("--delay-weights", delay_weight_list, "LQR weights of the delay variants (default: as --weights)")
+      ->expected(4);
   CLI11_PARSE(app, argc, argv);
   if (full) {
     grid = 11;
@@ -93,6 +102,11 @@ int main(int argc, char** argv) {
     if (paper_weights) weights = LqrWallWeights::paper();
     if (!weight_list.empty()) weights = {weight_list[0], weight_list[1], weight_list[2], weight_list[3]};
     const LqrWallGains gains = designLqrWall(model, model.homePose(), weights);
+    LqrWallWeights delay_weights = weights;
+    if (!delay_weight_list.empty())
+      delay_weights = {delay_weight_list[0], delay_weight_list[1], delay_weight_list[2], delay_weight_list[3]};
+    // The delay variants run the design on the plant augmented with the commands in flight.
+    const LqrWallGains delay_gains = designLqrWall(model, model.homePose(), delay_weights, {}, delay_design);
     const double design_ms =
         std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t_design).count();
     std::printf("LQR design at the workspace centre, Q = diag(%g I, %g I, %g I), R = %g I: fastest pole %.0f rad/s, "
@@ -123,7 +137,7 @@ int main(int argc, char** argv) {
         spec.controller = kVariants[v].controller;
         spec.scenario = kVariants[v].scenario;
         spec.max_delay_samples = kVariants[v].delay;
-        results[job * kNumVariants + v] = simulateRun(model, gains, spec);
+        results[job * kNumVariants + v] = simulateRun(model, kVariants[v].delay > 0 ? delay_gains : gains, spec);
       }
       progress.advance();
     });

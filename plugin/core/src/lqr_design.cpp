@@ -76,6 +76,28 @@ StateSpace discretizeZoh(const StateSpace& c, double period) {
   return d;
 }
 
+StateSpace augmentWithInputDelay(const StateSpace& d, int delay_samples) {
+  if (delay_samples < 0) throw Error("augmentWithInputDelay: the delay must be >= 0 samples");
+  const Eigen::Index n = d.A.rows(), m = d.B.cols(), r = d.Bref.cols();
+  if (d.A.cols() != n || d.B.rows() != n || (r > 0 && d.Bref.rows() != n))
+    throw Error("augmentWithInputDelay: inconsistent matrix sizes");
+  if (delay_samples == 0) return d;
+  const Eigen::Index D = delay_samples, na = n + D * m;
+  StateSpace aug;
+  aug.A = MatX::Zero(na, na);
+  aug.A.topLeftCorner(n, n) = d.A;
+  aug.A.block(0, n + (D - 1) * m, n, m) = d.B;  // the oldest command in flight acts now
+  // Shift register: u_{k-j} of the next sample is u_{k-j+1} of this one.
+  aug.A.block(n + m, n, (D - 1) * m, (D - 1) * m).setIdentity();
+  aug.B = MatX::Zero(na, m);
+  aug.B.block(n, 0, m, m).setIdentity();  // u_k enters the queue
+  if (r > 0) {
+    aug.Bref = MatX::Zero(na, r);
+    aug.Bref.topRows(n) = d.Bref;
+  }
+  return aug;
+}
+
 double fastestPoleRadPerSecond(const MatX& A_closed_loop, double period) {
   const auto z = Eigen::EigenSolver<MatX>(A_closed_loop, false).eigenvalues();
   double fastest = 0.0;
@@ -99,12 +121,20 @@ LqrDesign designLqrWithIntegrators(const LqrDesignRequest& req) {
   if (req.R.rows() != m || req.R.cols() != m) throw Error("designLqrWithIntegrators: R must be m x m");
   LqrDesign d;
   d.plant = linearize(req.dynamics, req.x0, req.u0);
+  if (req.input_delay_samples < 0) throw Error("designLqrWithIntegrators: input_delay_samples must be >= 0");
   d.discrete = discretizeZoh(augmentWithIntegrators(d.plant, req.C), req.period);
-  d.dare = solveDare(d.discrete.A, d.discrete.B, req.Q, req.R, req.dare);
+  d.design_plant = augmentWithInputDelay(d.discrete, req.input_delay_samples);
+  // The commands in flight carry no weight of their own: they are costed through the states they
+  // move (and they are stable, nilpotent states, so (A, Q) stays detectable).
+  const Eigen::Index na = d.design_plant.A.rows();
+  MatX Q = MatX::Zero(na, na);
+  Q.topLeftCorner(n + p, n + p) = req.Q;
+  d.dare = solveDare(d.design_plant.A, d.design_plant.B, Q, req.R, req.dare);
   d.K = d.dare.K;
   d.Kc = d.K.leftCols(n);
-  d.Ki = d.K.rightCols(p);
-  d.fastest_pole_rad_s = fastestPoleRadPerSecond(d.discrete.A - d.discrete.B * d.K, req.period);
+  d.Ki = d.K.middleCols(n, p);
+  d.Kd = d.K.rightCols(na - n - p);
+  d.fastest_pole_rad_s = fastestPoleRadPerSecond(d.design_plant.A - d.design_plant.B * d.K, req.period);
   return d;
 }
 

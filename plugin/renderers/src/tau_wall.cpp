@@ -1,6 +1,7 @@
 #include "uhaptics/renderers/tau_wall.hpp"
 
 #include <cmath>
+#include <string>
 
 #include "uhaptics/core/dare.hpp"
 #include "uhaptics/core/limits.hpp"
@@ -16,9 +17,11 @@ struct ControllerDesign {
 };
 
 ControllerDesign designController(const TauModel& model, const Vec6& operating_pose, const LqrWallWeights& w,
-                                  bool check_preconditions) {
+                                  int command_delay, bool check_preconditions) {
   if (!(w.velocity >= 0 && w.position >= 0 && w.integral > 0 && w.torque > 0))
     throw Error("designLqrWall: weights must be non-negative (integral and torque weights positive)");
+  if (command_delay < 0 || command_delay > kMaxCommandDelay)
+    throw Error("designLqrWall: command delay must be in [0, " + std::to_string(kMaxCommandDelay) + "] samples");
   ControllerDesign out;
   LqrWallGains& gains = out.gains;
   gains.operating_pose = operating_pose;
@@ -46,10 +49,13 @@ ControllerDesign designController(const TauModel& model, const Vec6& operating_p
   req.Q = q_diag.asDiagonal();
   req.R = MatX::Identity(6, 6) * w.torque;
   req.period = model.servoPeriod();
+  req.input_delay_samples = command_delay;
   req.dare.check_preconditions = check_preconditions;
   const LqrDesign d = designLqrWithIntegrators(req);
   gains.Kc = d.Kc;
   gains.Ki = d.Ki;
+  gains.command_delay = command_delay;
+  gains.Kd.leftCols(6 * command_delay) = d.Kd;
   Eigen::PartialPivLU<Mat6> lu(gains.Ki);
   if (!(lu.rcond() > 1e-12)) throw Error("designLqrWall: integral gain is singular; bumpless entry impossible");
   gains.Ki_inverse = lu.inverse();
@@ -66,8 +72,8 @@ ControllerDesign designController(const TauModel& model, const Vec6& operating_p
 }  // namespace
 
 LqrWallGains designLqrWall(const TauModel& model, const Vec6& operating_pose, const LqrWallWeights& w,
-                           const ObserverNoise& noise) {
-  ControllerDesign design = designController(model, operating_pose, w, true);
+                           const ObserverNoise& noise, int command_delay) {
+  ControllerDesign design = designController(model, operating_pose, w, command_delay, true);
   LqrWallGains& gains = design.gains;
   const MatX& Ad = design.discrete_A;
   const MatX& Bd = design.discrete_B;
@@ -101,7 +107,7 @@ LqrWallGains redesignLqrWallGains(const TauModel& model, const Vec6& operating_p
                                   const LqrWallWeights& w) {
   // The structure (stabilizability/detectability) does not change with the operating point inside
   // the singularity-free workspace; the residual and closed-loop checks still run on every solve.
-  LqrWallGains gains = designController(model, operating_pose, w, false).gains;
+  LqrWallGains gains = designController(model, operating_pose, w, designed.command_delay, false).gains;
   gains.observer_joints = designed.observer_joints;
   gains.observer_torque = designed.observer_torque;
   gains.observer_A = designed.observer_A;
@@ -114,11 +120,21 @@ void LqrJointRegulator::reset(const Vec6& q_measured) noexcept {
   estimate_.setZero();
   estimate_.segment<6>(6) = q_measured - gains_.observer_joints;
   integral_.setZero();
-  last_torque_ = gains_.observer_torque;
+  for (Vec6& c : commands_) c = gains_.observer_torque;  // at rest, holding gravity
+  head_ = 0;
+}
+
+Vec6 LqrJointRegulator::inFlightTerm() const noexcept {
+  Vec6 term = Vec6::Zero();
+  for (int j = 1; j <= gains_.command_delay; ++j)
+    term.noalias() += gains_.Kd.middleCols<6>(6 * (j - 1)) * (commanded(j) - gains_.operating_torque);
+  return term;
 }
 
 void LqrJointRegulator::observe(const Vec6& q_measured) noexcept {
-  const Vec<18> predicted = gains_.observer_A * estimate_ + gains_.observer_B * (last_torque_ - gains_.observer_torque);
+  // The command that drove the plant over the last period: issued command_delay periods before it.
+  const Vec6& acting = commanded(1 + gains_.command_delay);
+  const Vec<18> predicted = gains_.observer_A * estimate_ + gains_.observer_B * (acting - gains_.observer_torque);
   const Vec6 innovation = q_measured - gains_.observer_joints - predicted.segment<6>(6);
   estimate_ = predicted + gains_.observer_gain * innovation;
 }

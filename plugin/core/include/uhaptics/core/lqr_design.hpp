@@ -30,14 +30,24 @@ StateSpace augmentWithIntegrators(const StateSpace& plant, const MatX& C);
 /// [[A, B, Bref], [0, 0, 0]] * T (Van Loan), exact for piecewise-constant inputs.
 StateSpace discretizeZoh(const StateSpace& continuous, double period);
 
+/// A discrete plant whose input reaches it `delay_samples` periods late, x+ = A x + B u_{k-D} (a
+/// computation/communication delay of D whole samples), written as an undelayed plant on the state
+/// (x, u_{k-1}, ..., u_{k-D}):
+///   [x; u_{k-1}; ...; u_{k-D}]+ = [[A, 0 .. 0, B], [0 .. 0], [I 0 .. 0], ..., [0 .. I 0]] (...) + [0; I; 0 .. 0] u_k.
+/// The reference input (Bref, if any) is internal to the controller and stays undelayed. D = 0
+/// returns the plant unchanged. Generic in A, B and D; throws Error on inconsistent sizes or D < 0.
+StateSpace augmentWithInputDelay(const StateSpace& discrete, int delay_samples);
+
 /// Everything an LQR-with-integrator design produces.
 struct LqrDesign {
   StateSpace plant;        // linearized continuous plant (x = (qdot, q))
-  StateSpace discrete;     // augmented and discretized
+  StateSpace discrete;     // augmented with the integrators and discretized (no delay states)
+  StateSpace design_plant; // `discrete` augmented with the input delay: what the DARE ran on
   DareResult dare;
-  MatX K;                  // full gain (inputs x augmented states)
+  MatX K;                  // full gain (inputs x design_plant states)
   MatX Kc;                 // on the plant states
   MatX Ki;                 // on the integral states
+  MatX Kd;                 // on the commands in flight (u_{k-1}, ..., u_{k-D}); m x 0 without delay
   double fastest_pole_rad_s = 0.0;  // max |ln z| / T over the closed-loop eigenvalues z
 };
 
@@ -49,10 +59,11 @@ struct LqrDesignRequest {
   MatX Q;           // weight on augmented states
   MatX R;           // weight on inputs
   double period = 1e-3;
+  int input_delay_samples = 0;  // D: design for x+ = A x + B u_{k-D} (delay states weighted 0)
   DareOptions dare;
 };
 
-/// Full redesign: linearize + augment + discretize + DARE + gain. Throws uhaptics::Error.
+/// Full redesign: linearize + augment + discretize (+ delay states) + DARE + gain. Throws uhaptics::Error.
 LqrDesign designLqrWithIntegrators(const LqrDesignRequest& request);
 
 /// Fastest pole in rad/s of the discrete closed loop A - B K: max |ln z| / T.

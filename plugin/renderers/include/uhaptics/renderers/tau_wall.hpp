@@ -57,9 +57,17 @@ struct ObserverNoise {
   double quantization = 0.0;       // encoder std (rad); 0: resolution / sqrt(12) of the model
 };
 
+/// Largest command delay (whole servo periods) a wall design can account for; the regulator's
+/// buffers are sized for it, so the servo tick stays allocation-free.
+constexpr int kMaxCommandDelay = 4;
+
 struct LqrWallGains {
   Mat<6, 12> Kc = Mat<6, 12>::Zero();  // on (qdot, q)
   Mat6 Ki = Mat6::Zero();              // on the integral of (r - q)
+  // Delay-aware design (command_delay D > 0): the plant applies the command of D periods ago, and
+  // Kd (first 6 D columns) acts on the commands in flight (u_{k-1} - u0, ..., u_{k-D} - u0).
+  int command_delay = 0;
+  Mat<6, 6 * kMaxCommandDelay> Kd = Mat<6, 6 * kMaxCommandDelay>::Zero();
   Mat6 Ki_inverse = Mat6::Zero();      // for bumpless entry
   double period = 1e-3;
   double fastest_pole_rad_s = 0.0;
@@ -78,14 +86,17 @@ struct LqrWallGains {
 };
 
 /// Linearize the model at the operating pose (at rest, holding gravity), augment with integrators,
-/// ZOH-discretize at the model's servo period, solve the DARE, split the gain; then design the
-/// steady-state Kalman observer on the same discretized plant (a second DARE). Throws Error (e.g.
-/// unreachable pose, failed DARE). Set-up code.
+/// ZOH-discretize at the model's servo period, augment with `command_delay` commands in flight
+/// (0..kMaxCommandDelay; 0: the undelayed design), solve the DARE, split the gain; then design the
+/// steady-state Kalman observer on the same discretized plant (a second DARE; it is fed the command
+/// that reaches the plant under that delay). Throws Error (e.g. unreachable pose, failed DARE).
+/// Set-up code.
 LqrWallGains designLqrWall(const TauModel& model, const Vec6& operating_pose, const LqrWallWeights& weights = {},
-                           const ObserverNoise& noise = {});
+                           const ObserverNoise& noise = {}, int command_delay = 0);
 
 /// Gain-only redesign at a new operating pose (e.g. each new contact point), fast enough for one
-/// servo period: linearize + augment + ZOH + DARE + gain; the observer is copied from `designed`.
+/// servo period: linearize + augment + ZOH + DARE + gain, for the command delay `designed` was made
+/// for; the observer is copied from `designed`.
 /// Why the observer need not follow: it only predicts one period ahead, its disturbance state d
 /// absorbs the model mismatch between operating points, and its gain is set by the encoder noise,
 /// not by the contact point (tests/tau: the centre's observer stays stable on the plant linearized
@@ -97,32 +108,44 @@ LqrWallGains redesignLqrWallGains(const TauModel& model, const Vec6& operating_p
 /// Allocation-free; used by the wall renderer and by the step-reference/force-step checks.
 class LqrJointRegulator {
  public:
-  explicit LqrJointRegulator(const LqrWallGains& gains) : gains_(gains) {}
+  explicit LqrJointRegulator(const LqrWallGains& gains) : gains_(gains) {
+    for (Vec6& c : commands_) c.setZero();
+  }
   void setGains(const LqrWallGains& gains) noexcept { gains_ = gains; }
   /// Observer at rest at the measured joints, integrator cleared.
   void reset(const Vec6& q_measured) noexcept;
   /// Observer update with the new measurement (call once per tick, before control()).
   void observe(const Vec6& q_measured) noexcept;
-  /// The torque actually applied this tick (after saturation), for the next prediction.
-  void applied(const Vec6& torque) noexcept { last_torque_ = torque; }
+  /// The torque actually commanded this tick (after saturation): queued as a command in flight.
+  void applied(const Vec6& torque) noexcept {
+    head_ = (head_ + 1) % kHistory;
+    commands_[head_] = torque;
+  }
   Vec6 velocity() const noexcept { return estimate_.head<6>(); }
   Vec6 position() const noexcept { return gains_.observer_joints + estimate_.segment<6>(6); }
   Vec6 disturbance() const noexcept { return estimate_.tail<6>(); }
-  /// -Kc e - Ki x_i for the error e = (qdot - qdot_ref, q - r).
-  Vec6 control(const Vec<12>& error) const noexcept { return -gains_.Kc * error - gains_.Ki * integral_; }
+  /// -Kc e - Ki x_i - Kd (commands in flight - u0) for the error e = (qdot - qdot_ref, q - r).
+  Vec6 control(const Vec<12>& error) const noexcept { return -gains_.Kc * error - gains_.Ki * integral_ - inFlightTerm(); }
   /// x_i += T (r - q) = -T (q - r).
   void integrate(const Vec6& position_error) noexcept { integral_ -= gains_.period * position_error; }
   /// Bumpless start: x_i such that control(error) = 0.
-  void startBumpless(const Vec<12>& error) noexcept { integral_ = -gains_.Ki_inverse * (gains_.Kc * error); }
+  void startBumpless(const Vec<12>& error) noexcept {
+    integral_ = -gains_.Ki_inverse * (gains_.Kc * error + inFlightTerm());
+  }
   void clearIntegral() noexcept { integral_.setZero(); }
   const Vec6& integral() const noexcept { return integral_; }
   const LqrWallGains& gains() const noexcept { return gains_; }
 
  private:
+  static constexpr int kHistory = kMaxCommandDelay + 1;
+  /// The command issued `samples_ago` ticks ago (1: the last one), 1 <= samples_ago <= kHistory.
+  const Vec6& commanded(int samples_ago) const noexcept { return commands_[(head_ + kHistory + 1 - samples_ago) % kHistory]; }
+  Vec6 inFlightTerm() const noexcept;
   LqrWallGains gains_;
   Vec<18> estimate_ = Vec<18>::Zero();
   Vec6 integral_ = Vec6::Zero();
-  Vec6 last_torque_ = Vec6::Zero();
+  Vec6 commands_[kHistory];  // ring buffer of the last kHistory commands, newest at head_
+  int head_ = 0;
 };
 
 // --- renderers ----------------------------------------------------------------------------------
