@@ -1,14 +1,17 @@
 cmake_minimum_required(VERSION 3.19)  # string(JSON); quoted arguments are never dereferenced
 # Runs one unchanged CHAI3D example headless for a bounded time with a uhaptics device selected, then
 # checks what the device recorded. cmake -P run_example.cmake with
-#   EXE, DEVICE, SECONDS, STATS (stats file path), XVFB_RUN, TIMEOUT, EXPECT:
+#   EXE, DEVICE, SECONDS, STATS (stats file path), XVFB_RUN, TIMEOUT, BACKEND (default sim), EXPECT:
 #     rejected  the selection is invalid: the slot must say so, name the choices, and write nothing
 #     forces    ticks at the device's servo rate, and forces rendered
 #     contacts  as forces, plus at least one contact episode (the scripted hand reached the scene)
 file(REMOVE "${STATS}")
 set(ENV{UHAPTICS_DEVICE} "${DEVICE}")
 set(ENV{UHAPTICS_STATS} "${STATS}")
-set(ENV{UHAPTICS_BACKEND} "sim")
+if(NOT BACKEND)
+  set(BACKEND sim)
+endif()
+set(ENV{UHAPTICS_BACKEND} "${BACKEND}")
 math(EXPR _limit "${SECONDS} + 30")
 # The examples run until a key is pressed; timeout ends them (exit 124). SIGTERM skips atexit
 # handlers, so the stats file checked here is the device's periodic one (every 0.5 s).
@@ -41,8 +44,9 @@ string(JSON rate GET "${json}" rate_hz)
 string(JSON contacts GET "${json}" contacts)
 string(JSON peak GET "${json}" peak_force_N)
 string(JSON output GET "${json}" peak_output)
-if(NOT device STREQUAL DEVICE)
-  message(FATAL_ERROR "stats are from device '${device}', expected '${DEVICE}'")
+string(JSON backend GET "${json}" backend)
+if(NOT device STREQUAL DEVICE OR NOT backend STREQUAL BACKEND)
+  message(FATAL_ERROR "stats are from device '${device}' on '${backend}', expected '${DEVICE}' on '${BACKEND}'")
 endif()
 # The device opens after the window and GL context exist (about 1 s under Xvfb): ask for half a
 # second of servo ticks, at no less than half the nominal rate (the haptic thread shares 2 cores with

@@ -141,10 +141,13 @@ TEST_CASE("joint I/O, emulated: the same renderer through the servo loop and the
       std::this_thread::sleep_for(std::chrono::milliseconds(1));
     }
     REQUIRE(got);
+    const std::uint32_t first_sample_us = io->sampleTimeUs();
     // 100 periods of the servo thread (a few seconds at most, even in a sanitizer build).
     const auto t0 = std::chrono::steady_clock::now();
     while (io->servoLoop()->counters().ticks < 100 && std::chrono::steady_clock::now() - t0 < std::chrono::seconds(10))
       std::this_thread::sleep_for(std::chrono::milliseconds(5));
+    REQUIRE(io->read(q));
+    CHECK(io->sampleTimeUs() != first_sample_us);  // the board's sample clock, advancing
     io->servoLoop()->stop();  // counters and the renderer's fault count are final
     const ServoCounters k = io->servoLoop()->counters();
     CHECK(k.ticks >= 100);
@@ -158,6 +161,45 @@ TEST_CASE("joint I/O, emulated: the same renderer through the servo loop and the
     CHECK_FALSE(io->isOpen());
     CHECK(io->servoLoop() == nullptr);
   }
+}
+
+TEST_CASE("joint rate estimator: device-clock differences, repeated samples held, clock wrap", "[servo][jointio]") {
+  JointRateEstimator rate;
+  double q[2] = {0.1, -0.2}, qd[2] = {9.0, 9.0};
+  rate.update(q, 2, 1000, qd);
+  CHECK(qd[0] == 0.0);  // first reading: no rate yet
+  CHECK(qd[1] == 0.0);
+  q[0] = 0.1 + 2e-3;  // 2 rad/s over 1 ms
+  q[1] = -0.2 - 5e-4;  // -0.5 rad/s
+  rate.update(q, 2, 2000, qd);
+  CHECK(qd[0] == Approx(2.0).epsilon(1e-9));
+  CHECK(qd[1] == Approx(-0.5).epsilon(1e-9));
+  // The same sample again (the board has not sampled since): the rate is held, not zeroed.
+  rate.update(q, 2, 2000, qd);
+  CHECK(qd[0] == Approx(2.0).epsilon(1e-9));
+  // Across the 32-bit wrap: 0xFFFFFE0C -> 0x000001F4 is 1000 us.
+  JointRateEstimator wrap;
+  double p[1] = {0.0}, pd[1];
+  wrap.update(p, 1, 0xFFFFFE0Cu, pd);
+  p[0] = 1e-3;
+  wrap.update(p, 1, 0x000001F4u, pd);
+  CHECK(pd[0] == Approx(1.0).epsilon(1e-9));
+  // Reset: the next reading starts over.
+  wrap.reset();
+  wrap.update(p, 1, 5000, pd);
+  CHECK(pd[0] == 0.0);
+}
+
+TEST_CASE("joint I/O, sim: the sample time is the simulated time", "[servo][jointio]") {
+  const auto io = makeJointIo("tau", "sim", options());
+  io->open();
+  double q[wire::kMaxChannels];
+  REQUIRE(io->read(q));
+  CHECK(io->sampleTimeUs() == 0u);
+  for (int k = 0; k < 250; ++k) io->advance(1e-3);
+  REQUIRE(io->read(q));
+  CHECK(io->sampleTimeUs() == 250000u);
+  io->close();
 }
 
 TEST_CASE("joint I/O, usb without a board: open() fails saying what was found, nothing runs", "[servo][jointio]") {

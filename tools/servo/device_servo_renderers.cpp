@@ -51,14 +51,9 @@ RhiServoRenderer::RhiServoRenderer(Rhi4Model model)
 void RhiServoRenderer::render(const DeviceSnapshot& s, const EffortRequest& r, double* efforts) noexcept {
   const Vec<4> q = Eigen::Map<const Vec<4>>(s.position.data());
   const double t = 1e-6 * s.board_time_us;
-  // Joint velocity from consecutive samples and their board timestamps (the board's clock, not
-  // the host's wake-up time); unsigned difference: correct across the 32-bit wrap.
-  const double dt = 1e-6 * static_cast<double>(static_cast<std::uint32_t>(s.sample_time_us[0] - previous_sample_us_));
-  Vec<4> qd = Vec<4>::Zero();
-  if (have_previous_ && dt > 0.0) qd = (q - previous_q_) / dt;
-  previous_q_ = q;
-  previous_sample_us_ = s.sample_time_us[0];
-  have_previous_ = true;
+  // Joint velocity over the board's sample clock (not the host's wake-up time).
+  Vec<4> qd;
+  rate_.update(s.position.data(), 4, s.sample_time_us[0], qd.data());
   const Vec2 force(0.0, 2.0 * std::sin(2.0 * M_PI * 0.5 * t));  // N, along paper 003's palpation axis u
   Vec<4> tau;
   if (controller_.tick(t, q, qd, force, tau) != Fault::kNone) ++faults_;

@@ -14,6 +14,7 @@
 #include <memory>
 #include <string>
 
+#include "uhaptics/backends/joint_io.hpp"
 #include "uhaptics/backends/servo_loop.hpp"
 #include "uhaptics/models/exo_finger_model.hpp"
 #include "uhaptics/models/planar_linkage_model.hpp"
@@ -69,9 +70,7 @@ class RhiServoRenderer final : public DeviceServoRenderer {
  private:
   std::unique_ptr<const Rhi4Model> model_;
   Controller controller_;
-  Vec<4> previous_q_ = Vec<4>::Zero();
-  std::uint32_t previous_sample_us_ = 0;
-  bool have_previous_ = false;
+  JointRateEstimator rate_;
 };
 
 /// The device's renderer on the model in <params_dir>/<device file>; throws Error for kTestPlant or

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <array>
+#include <cmath>
 
 #include "uhaptics/backends/board_emulator.hpp"
 #include "uhaptics/backends/device_plants.hpp"
@@ -28,6 +29,7 @@ class SimJointIo final : public JointIo {
     const Channels zero{};
     plant_->applyCommand(zero.data());
     plant_.reset();
+    time_us_ = 0.0;
   }
   bool isOpen() const noexcept override { return plant_ != nullptr; }
 
@@ -45,12 +47,16 @@ class SimJointIo final : public JointIo {
     plant_->applyCommand(u.data());
   }
   void advance(double dt) noexcept override {
-    if (plant_) plant_->advance(dt);
+    if (!plant_) return;
+    plant_->advance(dt);
+    if (dt > 0.0 && std::isfinite(dt)) time_us_ = std::fmod(time_us_ + 1e6 * dt, 4294967296.0);  // wraps like a board clock
   }
+  std::uint32_t sampleTimeUs() const noexcept override { return static_cast<std::uint32_t>(std::llround(time_us_) & 0xffffffffLL); }
   std::string describe() const override { return spec().descriptor.name + ", sim"; }
 
  private:
   std::string params_dir_;
+  double time_us_ = 0.0;
   std::unique_ptr<BoardPlant> plant_;
 };
 
@@ -111,6 +117,7 @@ class ServoJointIo final : public JointIo {
     loop_->request(r);  // the servo loop's safety stage checks it before it leaves the host
   }
   void advance(double) noexcept override {}
+  std::uint32_t sampleTimeUs() const noexcept override { return snapshot_.sample_time_us[0]; }
   ServoLoop* servoLoop() noexcept override { return loop_.get(); }
   std::string describe() const override {
     return spec().descriptor.name + ", " + backend() + (transport_ ? std::string(" (") + transport_->describe() + ")" : "");
@@ -128,6 +135,21 @@ class ServoJointIo final : public JointIo {
 };
 
 }  // namespace
+
+void JointRateEstimator::update(const double* positions, int n, std::uint32_t sample_us, double* rates) noexcept {
+  n = std::clamp(n, 0, wire::kMaxChannels);
+  if (have_previous_ && sample_us != previous_us_) {
+    // Unsigned difference: the elapsed time is right across the clock's wrap.
+    const double dt = 1e-6 * static_cast<double>(static_cast<std::uint32_t>(sample_us - previous_us_));
+    for (int i = 0; i < n; ++i) rate_[i] = (positions[i] - previous_[i]) / dt;
+  } else if (!have_previous_) {
+    std::fill(rate_.begin(), rate_.end(), 0.0);
+  }
+  std::copy(positions, positions + n, previous_.begin());
+  previous_us_ = sample_us;
+  have_previous_ = true;
+  std::copy(rate_.begin(), rate_.begin() + n, rates);
+}
 
 std::vector<std::string> jointIoBackends() { return {"sim", "emulated", "usb"}; }
 

@@ -81,8 +81,17 @@ void cExoFingerDevice::updateState(double a_dt) noexcept {
 }
 
 void cExoFingerDevice::startBackend() {
-  if (m_selection.backend != "sim") throw uhaptics::Error("the finger exoskeleton has no '" + m_selection.backend + "' backend");
   const Model& model = *m_model;
+  m_renderer->reset();
+  m_actuator.setZero();
+  if (hasBoard()) {  // the board's finger moves by itself (emulated: paper 000's flexion-extension)
+    m_sim.reset();
+    Model::JointVector q;
+    startBoard(Model::kJoints, Model::kActuated, q.data());
+    uhaptics::update(model, q, m_data);
+    updateState(0.0);
+    return;
+  }
   // The user: flexion-extension cycles for half an hour (the sim's longest; then the finger rests),
   // or a finger held still when the hand is off.
   uhaptics::FingerTrajectory trajectory =
@@ -96,22 +105,32 @@ void cExoFingerDevice::startBackend() {
   options.update_rate_hz = 1.0 / getServoPeriod();
   options.force_loop_lag = m_selection.option("force_loop_lag", 1.0, 0.0, 1.0) != 0.0;
   m_sim = std::make_unique<uhaptics::ExoFingerSim>(model, std::move(trajectory), options);
-  m_renderer->reset();
   uhaptics::update(model, m_sim->state().q, m_data);
   updateState(0.0);
-  m_actuator.setZero();
 }
 
 void cExoFingerDevice::stopBackend() noexcept {
   m_actuator.setZero();
   m_fingerTorqueCommand.setZero();
   if (m_sim) m_sim->command(m_actuator);
+  commandBoard(m_actuator.data());
 }
 
 uhaptics::Fault cExoFingerDevice::servoTick(const ServoInput& a_input, double& a_outputMagnitude) noexcept {
   // The finger is position-driven: the hand's force (and any torque) has nothing to move.
   const Model& model = *m_model;
-  uhaptics::update(model, m_sim->state().q, m_data);
+  a_outputMagnitude = 0.0;
+  Model::JointVector q;
+  if (hasBoard()) {
+    std::uint32_t sample_us = 0;
+    if (!readBoard(q.data(), sample_us)) {  // zero commanded: link down or host watchdog
+      m_actuator.setZero();
+      return uhaptics::Fault::kDeviceError;
+    }
+  } else {
+    q = m_sim->state().q;
+  }
+  uhaptics::update(model, q, m_data);
   // The proxy pull in the finger plane (device y, z) -> hand frame -> finger-joint torque.
   const uhaptics::Vec2 f_hand = deviceToPlanar(a_input.force);
   Model::TaskVector x_proxy = m_data.x;
@@ -122,9 +141,14 @@ uhaptics::Fault cExoFingerDevice::servoTick(const ServoInput& a_input, double& a
   }
   x_proxy += m_fingerTorqueCommand / m_couplingStiffness;  // multi-point tools' joint torque
   const uhaptics::Fault fault = m_renderer->tick(m_data.q, x_proxy, m_actuator);
+  a_outputMagnitude = std::abs(m_actuator(0));
+  if (hasBoard()) {
+    commandBoard(m_actuator.data());
+    updateState(a_input.dt);  // this reading; the command shows in the next
+    return fault;
+  }
   m_sim->command(m_actuator);
   m_sim->step();
-  a_outputMagnitude = std::abs(m_actuator(0));
   uhaptics::update(model, m_sim->state().q, m_data);
   updateState(a_input.dt);
   return fault != uhaptics::Fault::kNone ? fault : m_sim->state().fault;

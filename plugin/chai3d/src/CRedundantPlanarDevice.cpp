@@ -56,39 +56,73 @@ cRedundantPlanarDevice::cRedundantPlanarDevice(unsigned int a_deviceNumber, cons
   m_specifications.m_maxLinearDamping = 5.0;       // assumed: well inside 1 kHz stability for these masses
   // Assumed: a 10 cm disc around home keeps the arm far from the 0.786 m reach boundary.
   m_specifications.m_workspaceRadius = a_selection.option("workspace_radius", 0.1, 0.01, 0.3);
-  m_state.joints = model.home();
+  m_q = model.home();
+  updateState();
 }
 
 cRedundantPlanarDevice::~cRedundantPlanarDevice() { close(); }
 
 void cRedundantPlanarDevice::startBackend() {
-  if (m_selection.backend != "sim") throw uhaptics::Error("the RHI has no '" + m_selection.backend + "' backend");
-  m_sim = std::make_unique<uhaptics::SimulatedPlanarLinkage<4>>(*m_model);
-  m_sim->reset(m_model->home());
   m_controller->reset();
   m_tau.setZero();
+  m_qd.setZero();
+  m_rate.reset();
+  if (hasBoard()) {
+    m_sim.reset();
+    startBoard(Model::kJoints, Model::kJoints, m_q.data());
+  } else {
+    m_sim = std::make_unique<uhaptics::SimulatedPlanarLinkage<4>>(*m_model);
+    m_sim->reset(m_model->home());
+    m_q = m_sim->position();
+  }
   updateState();
 }
 
-void cRedundantPlanarDevice::stopBackend() noexcept { m_tau.setZero(); }
+void cRedundantPlanarDevice::stopBackend() noexcept {
+  m_tau.setZero();
+  commandBoard(m_tau.data());
+}
 
 uhaptics::Fault cRedundantPlanarDevice::servoTick(const ServoInput& a_input, double& a_outputMagnitude) noexcept {
+  a_outputMagnitude = 0.0;
+  if (hasBoard()) {
+    std::uint32_t sample_us = 0;
+    if (!readBoard(m_q.data(), sample_us)) {  // zero commanded: link down or host watchdog
+      m_tau.setZero();
+      return uhaptics::Fault::kDeviceError;
+    }
+    m_rate.update(m_q.data(), Model::kJoints, sample_us, m_qd.data());
+  } else {
+    m_q = m_sim->position();
+    m_qd = m_sim->velocity();
+  }
   // A planar device: only the in-plane force is rendered (no torque, x not actuated).
-  const uhaptics::Fault fault =
-      m_controller->tick(m_sim->time(), m_sim->position(), m_sim->velocity(), deviceToPlanar(a_input.force), m_tau);
-  uhaptics::EndEffectorLoad hand;
-  hand.bias = deviceToPlanar(a_input.handForce);  // constant over the period
-  m_sim->setLoad(hand);
-  const uhaptics::Fault sim_fault = m_sim->step(m_tau, a_input.dt);
+  const uhaptics::Fault fault = m_controller->tick(a_input.time, m_q, m_qd, deviceToPlanar(a_input.force), m_tau);
   a_outputMagnitude = m_tau.cwiseAbs().maxCoeff();
+  uhaptics::Fault backend_fault = uhaptics::Fault::kNone;
+  if (hasBoard()) {
+    commandBoard(m_tau.data());
+  } else {
+    uhaptics::EndEffectorLoad hand;
+    hand.bias = deviceToPlanar(a_input.handForce);  // constant over the period
+    m_sim->setLoad(hand);
+    backend_fault = m_sim->step(m_tau, a_input.dt);
+    m_q = m_sim->position();
+    m_qd = m_sim->velocity();
+  }
   updateState();
-  return fault != uhaptics::Fault::kNone ? fault : sim_fault;
+  return fault != uhaptics::Fault::kNone ? fault : backend_fault;
 }
 
 void cRedundantPlanarDevice::updateState() noexcept {
-  m_state.position = planarToDevice(m_sim->endEffectorPosition() - m_centre);
-  m_state.linearVelocity = planarToDevice(m_sim->endEffectorVelocity());
-  m_state.joints = m_sim->position();
+  // Kinematics of the latest joint state (the simulation's own end-effector state on sim).
+  uhaptics::Vec2 x;
+  Model::Jacobian J;
+  m_model->forward(m_q, x);
+  m_model->jacobian(m_q, J);
+  m_state.position = planarToDevice(x - m_centre);
+  m_state.linearVelocity = planarToDevice(J * m_qd);
+  m_state.joints = m_q;
 }
 
 bool cRedundantPlanarDevice::setNullSpaceOptions(const Controller::Options& a_options) {
@@ -108,7 +142,7 @@ cRedundantPlanarDevice::Controller::Status cRedundantPlanarDevice::getNullSpaceS
 
 cRedundantPlanarDevice::Model::JointVector cRedundantPlanarDevice::getJointPositions() {
   std::lock_guard<std::mutex> lock(deviceMutex());
-  return m_sim ? m_sim->position() : m_model->home();
+  return m_q;
 }
 
 }  // namespace chai3d

@@ -96,21 +96,31 @@ void cTauDevice::clearContactSurface() {
 }
 
 void cTauDevice::startBackend() {
-  if (m_selection.backend != "sim") throw uhaptics::Error("TAU has no '" + m_selection.backend + "' backend");
-  uhaptics::SimulatedTauOptions options;
-  options.tool_damping = m_toolDamping;
-  // The handle's rotational damping (the baseline device's 0.01 N m s/rad, as in tau-study): CHAI3D
-  // tools command no torque and the scripted hand holds no orientation, so without it the
-  // long-rod platform drifts in orientation under a push until a leg leaves its range.
-  options.tool_rotational_damping = m_selection.option("tool_rotational_damping", 0.01, 0.0, 1.0);
-  m_sim = std::make_unique<uhaptics::SimulatedTau>(*m_model, options);
-  m_sim->reset(m_model->homeJoints());
-  m_sim->detachHand();  // the scripted hand's force arrives as the external force
   m_lqr->reset();
-  m_data->pose = m_model->homePose();
+  m_data->pose = m_model->homePose();  // forward kinematics' first guess
   m_contact = Contact::kFree;
   m_lqrEngaged = false;
   m_tau.setZero();
+  m_qd.setZero();
+  m_rate.reset();
+  if (hasBoard()) {
+    m_sim.reset();
+    startBoard(6, 6, m_q.data());
+    if (m_model->forward(m_q, *m_data) != uhaptics::Fault::kNone) {
+      throw uhaptics::Error("TAU: the board's first joint reading does not assemble (forward kinematics fails)");
+    }
+  } else {
+    uhaptics::SimulatedTauOptions options;
+    options.tool_damping = m_toolDamping;
+    // The handle's rotational damping (the baseline device's 0.01 N m s/rad, as in tau-study): CHAI3D
+    // tools command no torque and the scripted hand holds no orientation, so without it the
+    // long-rod platform drifts in orientation under a push until a leg leaves its range.
+    options.tool_rotational_damping = m_selection.option("tool_rotational_damping", 0.01, 0.0, 1.0);
+    m_sim = std::make_unique<uhaptics::SimulatedTau>(*m_model, options);
+    m_sim->reset(m_model->homeJoints());
+    m_sim->detachHand();  // the scripted hand's force arrives as the external force
+    m_q = m_sim->encoderReading();
+  }
   updateState();
 }
 
@@ -166,8 +176,19 @@ void cTauDevice::updateContact(const uhaptics::Vec3& a_force) noexcept {
 uhaptics::Fault cTauDevice::servoTick(const ServoInput& a_input, double& a_outputMagnitude) noexcept {
   // a_input.dt is the model's servo period (checked equal at construction).
   const uhaptics::TauModel& model = *m_model;
-  const uhaptics::Vec6& q = m_sim->encoderReading();
-  uhaptics::Fault fault = model.forward(q, *m_data);
+  a_outputMagnitude = 0.0;
+  if (hasBoard()) {
+    std::uint32_t sample_us = 0;
+    if (!readBoard(m_q.data(), sample_us)) {  // zero commanded: link down or host watchdog
+      m_tau.setZero();
+      m_lqrEngaged = false;
+      return uhaptics::Fault::kDeviceError;
+    }
+    m_rate.update(m_q.data(), 6, sample_us, m_qd.data());
+  } else {
+    m_q = m_sim->encoderReading();
+  }
+  uhaptics::Fault fault = model.forward(m_q, *m_data);
   if (fault == uhaptics::Fault::kNone) {
     if (m_explicitSurface) {
       m_surface = m_explicit;
@@ -178,7 +199,7 @@ uhaptics::Fault cTauDevice::servoTick(const ServoInput& a_input, double& a_outpu
     }
     // The wall renderer runs every tick: its observer must be settled when a contact begins, and
     // in free space it is the gravity compensation.
-    const uhaptics::WallCommand& wall = m_lqr->tick(q, m_surface, &m_data->pose);
+    const uhaptics::WallCommand& wall = m_lqr->tick(m_q, m_surface, &m_data->pose);
     fault = wall.fault;
     m_tau = wall.torque;
     m_lqrEngaged = m_contact == Contact::kLqr && wall.in_contact;
@@ -193,13 +214,28 @@ uhaptics::Fault cTauDevice::servoTick(const ServoInput& a_input, double& a_outpu
     m_tau.setZero();
     if (fault == uhaptics::Fault::kNone) fault = uhaptics::Fault::kNonFiniteResult;
   }
-  const uhaptics::Fault sim_fault = m_sim->step(m_tau, a_input.handForce);
+  uhaptics::Fault backend_fault = uhaptics::Fault::kNone;
+  if (hasBoard()) {
+    commandBoard(m_tau.data());
+  } else {
+    backend_fault = m_sim->step(m_tau, a_input.handForce);
+  }
   a_outputMagnitude = m_tau.cwiseAbs().maxCoeff();
   updateState();
-  return fault != uhaptics::Fault::kNone ? fault : sim_fault;
+  return fault != uhaptics::Fault::kNone ? fault : backend_fault;
 }
 
 void cTauDevice::updateState() noexcept {
+  if (hasBoard()) {  // the board's reading: pose by forward kinematics, rates by the joints' differences
+    const uhaptics::Vec6& pose = m_data->pose;
+    const uhaptics::Vec6 rates = m_data->J * m_qd;
+    m_state.position = pose.head<3>() - m_centre;
+    m_state.rotation = uhaptics::PoseRotation(pose).R;
+    m_state.linearVelocity = rates.head<3>();
+    m_state.angularVelocity = rates.tail<3>();  // pose-angle rates, see below
+    m_state.joints = m_q;
+    return;
+  }
   if (!m_sim) {  // before the first open(): at home, at rest
     m_state.position = m_model->homePose().head<3>() - m_centre;
     m_state.joints = m_model->homeJoints();

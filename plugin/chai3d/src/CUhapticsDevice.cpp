@@ -1,5 +1,6 @@
 #include "uhaptics/chai3d/CUhapticsDevice.hpp"
 
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -70,8 +71,16 @@ bool cUhapticsDevice::open() {
     // subclass has filled in its specification.
     m_hand = std::make_unique<uhaptics::ScriptedHand>(m_hand->options(), m_specifications.m_workspaceRadius,
                                                       uhaptics::Vec3::Zero());
+    if (m_selection.backend != "sim") {
+      uhaptics::JointIoOptions options;
+      options.params_dir = paramsDirectory();
+      m_board = uhaptics::makeJointIo(m_selection.device, m_selection.backend, options);
+      m_board->open();  // throws with what to do: no board found (and what was), permission, version
+    }
     startBackend();
   } catch (const std::exception& e) {
+    if (m_board) m_board->close();  // nothing half-open: no servo thread, nothing commanded
+    m_board.reset();
     std::fprintf(stderr, "uhaptics: cannot open device '%s' (backend %s): %s\n", m_selection.device.c_str(),
                  m_selection.backend.c_str(), e.what());
     return C_ERROR;
@@ -93,6 +102,8 @@ bool cUhapticsDevice::close() {
     if (!m_deviceReady) return C_SUCCESS;
     m_deviceReady = false;
     stopBackend();
+    if (m_board) m_board->close();  // zero effort, servo thread stopped, interface released
+    m_board.reset();
   }
   stopStatsWriter();
   writeStats(m_statsPath);
@@ -100,6 +111,45 @@ bool cUhapticsDevice::close() {
 }
 
 bool cUhapticsDevice::calibrate(bool) { return m_deviceReady; }
+
+uhaptics::ServoLoop* cUhapticsDevice::getServoLoop() {
+  std::lock_guard<std::mutex> lock(m_mutex);
+  return m_board ? m_board->servoLoop() : nullptr;
+}
+
+bool cUhapticsDevice::readBoard(double* a_positions, std::uint32_t& a_sampleTimeUs) noexcept {
+  if (!m_board) return false;
+  if (!m_board->read(a_positions)) {
+    const std::array<double, uhaptics::wire::kMaxChannels> zero{};
+    m_board->command(zero.data());
+    return false;
+  }
+  a_sampleTimeUs = m_board->sampleTimeUs();
+  return true;
+}
+
+void cUhapticsDevice::commandBoard(const double* a_efforts) noexcept {
+  if (m_board) m_board->command(a_efforts);
+}
+
+void cUhapticsDevice::startBoard(int a_joints, int a_actuators, double* a_positions, double a_timeoutSeconds) {
+  const uhaptics::DeviceDescriptor& d = m_board->spec().descriptor;
+  if (d.joints != a_joints || d.actuators != a_actuators) {
+    throw uhaptics::Error("board '" + m_board->describe() + "' has " + std::to_string(d.joints) + " joints and " +
+                          std::to_string(d.actuators) + " actuators; device '" + m_selection.device + "' needs " +
+                          std::to_string(a_joints) + " and " + std::to_string(a_actuators));
+  }
+  // The servo loop connects in open(); its first STATE takes a few periods.
+  const auto deadline = Clock::now() + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(a_timeoutSeconds));
+  std::uint32_t sample_us = 0;
+  while (!readBoard(a_positions, sample_us)) {
+    if (Clock::now() > deadline) {
+      throw uhaptics::Error("no joint reading from '" + m_board->describe() + "' within " +
+                            std::to_string(a_timeoutSeconds) + " s");
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(1));
+  }
+}
 
 void cUhapticsDevice::setLockStep(bool a_lockStep) {
   std::lock_guard<std::mutex> lock(m_mutex);
@@ -144,6 +194,7 @@ void cUhapticsDevice::tickLocked() noexcept {
   input.torque = sendForce ? m_commandTorque : uhaptics::Vec3::Zero();
   input.handForce = m_handEnabled ? m_hand->force(t, m_state.position, m_state.linearVelocity) : uhaptics::Vec3::Zero();
   input.dt = m_servoPeriod;
+  input.time = t;
   double output = 0.0;
   m_lastFault = servoTick(input, output);
   ++m_ticks;

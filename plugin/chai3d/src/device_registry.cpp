@@ -21,11 +21,11 @@ struct Entry {
 // One line per device class built into the plugin.
 const std::vector<Entry>& entries() {
   static const std::vector<Entry> table = {
-      {"exo", "finger exoskeleton module, subspace proxy (paper 000)", {"sim"},
+      {"exo", "finger exoskeleton module, subspace proxy (paper 000)", {"sim", "emulated", "usb"},
        [](const DeviceSelection& s, unsigned int n) -> chai3d::cUhapticsDevicePtr { return chai3d::cExoFingerDevice::create(s, n); }},
-      {"tau", "TAU-class 6-DoF parallel device, LQR wall on stiff contact (paper 001)", {"sim"},
+      {"tau", "TAU-class 6-DoF parallel device, LQR wall on stiff contact (paper 001)", {"sim", "emulated", "usb"},
        [](const DeviceSelection& s, unsigned int n) -> chai3d::cUhapticsDevicePtr { return chai3d::cTauDevice::create(s, n); }},
-      {"rhi", "4-DoF planar redundant interface, J^T F + FME null-space control (paper 003)", {"sim"},
+      {"rhi", "4-DoF planar redundant interface, J^T F + FME null-space control (paper 003)", {"sim", "emulated", "usb"},
        [](const DeviceSelection& s, unsigned int n) -> chai3d::cUhapticsDevicePtr {
          return chai3d::cRedundantPlanarDevice::create(s, n);
        }},

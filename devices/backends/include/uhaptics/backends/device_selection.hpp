@@ -3,7 +3,8 @@
 // environment, optionally from a JSON file, environment winning.
 //
 //   UHAPTICS_DEVICE   device name (e.g. exo, tau, rhi); required unless the config file names one
-//   UHAPTICS_BACKEND  sim (default) or usb
+//   UHAPTICS_BACKEND  sim (default), emulated (the in-process board emulator over the wire protocol)
+//                     or usb (the device's board over libusb)
 //   UHAPTICS_CONFIG   path of a JSON file (format below)
 //   UHAPTICS_STATS    where the device writes its session statistics (default: none)
 //   UHAPTICS_HAND     on (default with sim) / off: the scripted hand that moves the simulated device

@@ -16,6 +16,8 @@
 //   io->close();       // zero effort, stop, release (also in the destructor)
 //
 // read/command/advance belong to one thread (the caller's servo or haptic thread).
+#include <array>
+#include <cstdint>
 #include <memory>
 #include <string>
 #include <vector>
@@ -55,6 +57,10 @@ class JointIo {
   /// Newest joint positions (spec().descriptor.joints values). False when there is no valid
   /// reading: not open, link down, or the host watchdog holds the device at zero.
   virtual bool read(double* positions) noexcept = 0;
+  /// Device-clock time [us] of the reading the last successful read() returned: the board's sample
+  /// timestamp (emulated, usb; wraps at 2^32) or the simulated time (sim). Equal on two reads when
+  /// no new sample arrived in between.
+  virtual std::uint32_t sampleTimeUs() const noexcept = 0;
   /// Efforts (spec().descriptor.actuators values), held until the next call.
   virtual void command(const double* efforts) noexcept = 0;
   /// sim: advances the simulation by dt. emulated/usb: nothing (the device runs on its own clock).
@@ -73,6 +79,23 @@ class JointIo {
  private:
   BoardSpec spec_;
   std::string backend_;
+};
+
+/// Joint rates from successive readings: backward difference over the device's own sample clock
+/// (not the host's wake-up time, which jitters), correct across the 32-bit clock wrap. A repeated
+/// sample (same timestamp: the board has not sampled again yet) keeps the previous rate instead of
+/// reading as a stop. The first reading after reset() gives zero rates. No allocation.
+class JointRateEstimator {
+ public:
+  void reset() noexcept { have_previous_ = false; }
+  /// n <= wire::kMaxChannels positions sampled at sample_us; writes n rates [unit/s].
+  void update(const double* positions, int n, std::uint32_t sample_us, double* rates) noexcept;
+
+ private:
+  std::array<double, wire::kMaxChannels> previous_{};
+  std::array<double, wire::kMaxChannels> rate_{};
+  std::uint32_t previous_us_ = 0;
+  bool have_previous_ = false;
 };
 
 /// Backends the factory offers, in the order to list them.

@@ -16,7 +16,8 @@
 //
 // Simulated backend: the finger is position-driven (paper 000's setting), following flexion-
 // extension cycles whose period is the scripted hand's lap time; the device's force loads the
-// finger, it does not deflect it.
+// finger, it does not deflect it. Board backends (emulated, usb): the same renderer on the board's
+// joint readings; the emulated board's finger follows paper 000's flexion-extension by itself.
 #include <memory>
 
 #include "uhaptics/backends/exo_finger_sim.hpp"
@@ -46,7 +47,8 @@ class cExoFingerDevice : public cUhapticsDevice {
   /// The finger's phalanx points (hand frame) of the latest state, for multi-point tools.
   uhaptics::ExoFingerPoints getFingerPoints();
   const uhaptics::ExoFingerModel& getModel() const { return *m_model; }
-  /// The actuator force of the latest tick [N] and the finger-joint torques the user felt [N m].
+  /// The actuator force of the latest tick [N] and the finger-joint torques the user felt [N m]
+  /// (simulated backend only: a board does not sense them, zero there).
   double getActuatorForce();
   uhaptics::Vec2 getFingerTorque();
   /// Multi-point tools (cExoFingerTool): a virtual-finger joint torque (MCP, PIP) [N m] from

@@ -12,7 +12,8 @@
 // motion, strong along a stiff contact force) without changing the force at the tool.
 //
 // Simulated backend: SimulatedPlanarLinkage (lumped dynamics, friction, torque saturation) with the
-// scripted hand's force applied at the end effector.
+// scripted hand's force applied at the end effector. Board backends (emulated, usb): the controller
+// on the board's joint readings, joint rates from their differences over the board's sample clock.
 #include <memory>
 
 #include "uhaptics/backends/simulated_planar_linkage.hpp"
@@ -67,13 +68,16 @@ class cRedundantPlanarDevice : public cUhapticsDevice {
   virtual uhaptics::Fault servoTick(const ServoInput& a_input, double& a_outputMagnitude) noexcept;
 
  private:
-  void updateState() noexcept;  // m_state from the simulated device
+  void updateState() noexcept;  // m_state from the simulated device or the board's reading
 
   std::unique_ptr<const Model> m_model;  // the controller keeps a reference
   std::unique_ptr<uhaptics::SimulatedPlanarLinkage<4>> m_sim;
   std::unique_ptr<Controller> m_controller;
   uhaptics::Vec2 m_centre = uhaptics::Vec2::Zero();  // end effector at home, task frame
   Model::JointVector m_tau = Model::JointVector::Zero();
+  Model::JointVector m_q = Model::JointVector::Zero();   // the latest joint reading
+  Model::JointVector m_qd = Model::JointVector::Zero();  // its rates
+  uhaptics::JointRateEstimator m_rate;                    // board backends
 };
 
 }  // namespace chai3d

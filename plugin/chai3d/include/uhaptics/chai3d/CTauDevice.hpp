@@ -14,7 +14,8 @@
 //     wall takes over: the surface is the plane through the proxy (tool + F / k) normal to F, held
 //     until the tool leaves it. Wall option 2 engages the LQR wall at every contact.
 // Simulated backend: SimulatedTau (lumped dynamics, quantized encoders, torque saturation) with the
-// scripted hand's force applied at the tool.
+// scripted hand's force applied at the tool. Board backends (emulated, usb): the same renderers on
+// the board's joint readings; velocities from their differences over the board's sample clock.
 #include <memory>
 
 #include "uhaptics/backends/simulated_tau.hpp"
@@ -64,7 +65,7 @@ class cTauDevice : public cUhapticsDevice {
  private:
   enum class Contact { kFree, kProbing, kLqr };
   void updateContact(const uhaptics::Vec3& a_force) noexcept;
-  void updateState() noexcept;  // m_state from the simulated device
+  void updateState() noexcept;  // m_state from the simulated device or the board's reading
 
   std::unique_ptr<const uhaptics::TauModel> m_model;  // sim and renderers keep references
   std::unique_ptr<uhaptics::SimulatedTau> m_sim;
@@ -82,6 +83,9 @@ class cTauDevice : public cUhapticsDevice {
   double m_onsetForce = 0.0;
   uhaptics::SurfaceContact m_surface;
   uhaptics::Vec6 m_tau = uhaptics::Vec6::Zero();
+  uhaptics::Vec6 m_q = uhaptics::Vec6::Zero();   // the latest joint reading
+  uhaptics::Vec6 m_qd = uhaptics::Vec6::Zero();  // its rates (board backends)
+  uhaptics::JointRateEstimator m_rate;
   bool m_explicitSurface = false;       // setContactSurface() in force
   uhaptics::SurfaceContact m_explicit;  // its surface, model frame
 };

@@ -13,6 +13,13 @@
 // of simulation). In lock-step mode every setForceAndTorqueAndGripperForce() call is exactly one
 // servo tick: deterministic, for tests.
 //
+// Backends: "sim" (default) steps the device's simulation inside each servo tick, with the scripted
+// hand as its user. "emulated" and "usb" open the device's board (uhaptics::makeJointIo) before
+// startBackend(): the board's real-time servo loop (its own thread, the board's rate, wire
+// protocol, watchdogs, safety stage) carries each tick's joint reading in and efforts out, and the
+// emulated board simulates the device with its own user. The servo tick itself still runs when the
+// application calls, at the device's period.
+//
 // Subclasses implement only what differs between devices: their specification (in the
 // constructor), their backend and their rendering method (the three protected hooks, which keep
 // m_state current). All hooks run with the device mutex held.
@@ -28,6 +35,7 @@
 #include "devices/CGenericHapticDevice.h"
 
 #include "uhaptics/backends/device_selection.hpp"
+#include "uhaptics/backends/joint_io.hpp"
 #include "uhaptics/backends/scripted_hand.hpp"
 #include "uhaptics/backends/session_stats.hpp"
 #include "uhaptics/core/fault.hpp"
@@ -82,6 +90,9 @@ class cUhapticsDevice : public cGenericHapticDevice {
   uhaptics::Fault getLastFault();
   const std::string& getDeviceName() const { return m_selection.device; }
   const std::string& getBackendName() const { return m_selection.backend; }
+  /// The board's servo loop (timing statistics, events) on the emulated and usb backends while
+  /// open; nullptr on sim.
+  uhaptics::ServoLoop* getServoLoop();
   /// Name of the rendering method now in use (may change at run time, e.g. TAU's wall).
   virtual std::string getRendererName() const = 0;
 
@@ -99,7 +110,8 @@ class cUhapticsDevice : public cGenericHapticDevice {
   /// (zero while forces are disabled) and the scripted hand's force (zero when there is none).
   struct ServoInput {
     uhaptics::Vec3 force, torque, handForce;
-    double dt;  // the servo period [s]
+    double dt;    // the servo period [s]
+    double time;  // servo ticks so far x dt [s]
   };
   /// One servo period: render the application's force/torque through the device's method, apply
   /// the hand's force, advance dt and update m_state. Returns the fault (zero command sent) and
@@ -128,6 +140,16 @@ class cUhapticsDevice : public cGenericHapticDevice {
   static uhaptics::Vec2 deviceToPlanar(const uhaptics::Vec3& a_device) noexcept {
     return uhaptics::Vec2(a_device.y(), -a_device.z());
   }
+  /// Board backends (emulated, usb): whether one is open, and its joint I/O. readBoard() gives the
+  /// newest joint reading and its device-clock time; while there is none (link down, host watchdog
+  /// holding zero) it commands zero and returns false. commandBoard() hands the efforts to
+  /// the board's servo loop, which checks them before they leave the host.
+  bool hasBoard() const noexcept { return m_board != nullptr; }
+  bool readBoard(double* a_positions, std::uint32_t& a_sampleTimeUs) noexcept;
+  void commandBoard(const double* a_efforts) noexcept;
+  /// In startBackend(): throws uhaptics::Error unless the board has these joint and actuator counts,
+  /// then waits (at most a_timeoutSeconds) for its first joint reading, written to a_positions.
+  void startBoard(int a_joints, int a_actuators, double* a_positions, double a_timeoutSeconds = 2.0);
   /// Folder of the device parameter files: $UHAPTICS_PARAMS_DIR, else the one this build ships.
   static std::string paramsDirectory();
   /// Held during every hook; subclass accessors that read device state take it too.
@@ -151,6 +173,7 @@ class cUhapticsDevice : public cGenericHapticDevice {
   bool m_forcesEnabled = true;
   bool m_handEnabled;
   std::unique_ptr<uhaptics::ScriptedHand> m_hand;
+  std::unique_ptr<uhaptics::JointIo> m_board;  // emulated, usb; opened in open(), closed in close()
   uhaptics::Vec3 m_commandForce = uhaptics::Vec3::Zero();
   uhaptics::Vec3 m_commandTorque = uhaptics::Vec3::Zero();
   std::uint64_t m_ticks = 0;
