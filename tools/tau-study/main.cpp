@@ -89,6 +89,24 @@ int main(int argc, char** argv) {
   std::vector<double> delay_weight_list;
   app.add_option("--delay-weights", delay_weight_list, "LQR weights of the delay variants (default: as --weights)")
       ->expected(4);
+  bool delay_random = false;
+  app.add_flag("--delay-random", delay_random,
+               "design the delay variants for the random delay itself, d ~ U{0..D} i.i.d. each period with D = "
+               "--delay-design (generalized Riccati equation)");
+  double delay_rate_weight = 0.0;
+  app.add_option("--delay-rate-weight", delay_rate_weight,
+                 "--delay-random only: weight on (u_k - u_{k-1})^2 per joint, (N m)^-2")
+      ->check(CLI::NonNegativeNumber);
+  std::vector<double> delay_observer;
+  app.add_option("--delay-observer", delay_observer,
+                 "observer noise of the delay variants: velocity, disturbance, position process noise, encoder std "
+                 "(0: resolution / sqrt(12))")
+      ->expected(4);
+  double delay_release = -1.0;
+  app.add_option("--delay-release-distance", delay_release,
+                 "LQR release height above the wall (m) in the delay variants (default: the renderer's 2e-4)");
+  bool ideal_encoders = false;
+  app.add_flag("--ideal-encoders", ideal_encoders, "ideal joint sensors instead of 4096-count encoders (all variants)");
   CLI11_PARSE(app, argc, argv);
   if (full) {
     grid = 11;
@@ -106,7 +124,19 @@ int main(int argc, char** argv) {
     if (!delay_weight_list.empty())
       delay_weights = {delay_weight_list[0], delay_weight_list[1], delay_weight_list[2], delay_weight_list[3]};
     // The delay variants run the design on the plant augmented with the commands in flight.
-    const LqrWallGains delay_gains = designLqrWall(model, model.homePose(), delay_weights, {}, delay_design);
+    CommandDelayDesign delay_model;
+    delay_model.samples = delay_design;
+    delay_model.random = delay_random;
+    delay_model.rate_weight = delay_rate_weight;
+    ObserverNoise delay_noise;
+    if (!delay_observer.empty())
+      delay_noise = {delay_observer[0], delay_observer[1], delay_observer[2], delay_observer[3]};
+    const LqrWallGains delay_gains = designLqrWall(model, model.homePose(), delay_weights, delay_noise, delay_model);
+    if (delay_random)
+      std::printf("random-delay design (d ~ U{0..%d}, rate weight %g): generalized Riccati %d steps, residual %.1e, "
+                  "mean-square radius %.4f (state feedback)\n",
+                  delay_design, delay_rate_weight, delay_gains.dare_iterations, delay_gains.dare_residual,
+                  delay_gains.ms_spectral_radius);
     const double design_ms =
         std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t_design).count();
     std::printf("LQR design at the workspace centre, Q = diag(%g I, %g I, %g I), R = %g I: fastest pole %.0f rad/s, "
@@ -137,6 +167,8 @@ int main(int argc, char** argv) {
         spec.controller = kVariants[v].controller;
         spec.scenario = kVariants[v].scenario;
         spec.max_delay_samples = kVariants[v].delay;
+        spec.quantize = !ideal_encoders;
+        spec.lqr_release_distance = kVariants[v].delay > 0 ? delay_release : -1.0;
         results[job * kNumVariants + v] = simulateRun(model, kVariants[v].delay > 0 ? delay_gains : gains, spec);
       }
       progress.advance();
@@ -151,6 +183,7 @@ int main(int argc, char** argv) {
       for (const char* m : {"d_z1_mm", "k_z1", "d_zs_mm", "k_zs", "max_pen_mm", "k_zs_std"})
         columns.push_back(std::string(v.label) + "_" + m);
     int faults = 0;
+    std::vector<int> variant_faults(kNumVariants, 0);
     std::vector<double> extreme_min(kNumVariants * 2, std::numeric_limits<double>::infinity());
     std::vector<double> extreme_max(kNumVariants * 2, 0.0);
     std::vector<double> max_pen(kNumVariants, 0.0);
@@ -164,6 +197,7 @@ int main(int argc, char** argv) {
         for (int r = 0; r < runs; ++r) {
           const RunMetrics& m = results[(p * runs + r) * kNumVariants + v];
           faults += m.fault != Fault::kNone;
+          variant_faults[v] += m.fault != Fault::kNone;
           dz1.push_back(m.d_z1);
           kz1.push_back(m.k_z1);
           dzs.push_back(m.d_zs);
@@ -217,6 +251,9 @@ int main(int argc, char** argv) {
     std::printf("\n%s\n", table.format().c_str());
     std::printf("%zu query points x %d runs x %zu variants = %zu runs of 3 s; faults: %d\n", points, runs, kNumVariants,
                 results.size(), faults);
+    for (std::size_t v = 0; v < kNumVariants; ++v)
+      std::printf("  %-13s faults %3d / %zu, max penetration %.3f mm\n", kVariants[v].label, variant_faults[v], jobs,
+                  1e3 * max_pen[v]);
     std::printf("wall time %.2f s on %u threads: %.0f simulated seconds per second\n", wall,
                 threads ? threads : tools::hardwareThreads(), simulated / wall);
 

@@ -49,6 +49,7 @@ RunMetrics simulateRun(const TauModel& model, const LqrWallGains& gains, const R
   // Paper 001's controller: the whole pose held at the contact point, bilaterally.
   lqr_options.follow_tangentially = false;
   lqr_options.unilateral = false;
+  if (spec.lqr_release_distance >= 0.0) lqr_options.release_distance = spec.lqr_release_distance;
   LqrWallRenderer lqr(model, gains, lqr_options);
   SpringWallRenderer::Options spring_options;
   spring_options.stiffness = params.spring_stiffness;

@@ -23,6 +23,7 @@ struct RunSpec {
   int max_delay_samples = 0;    // 0..3 in the paper's delay variant
   bool quantize = true;         // 4096-count encoders (false: ideal joint sensors)
   double duration = 3.0;        // s
+  double lqr_release_distance = -1.0;  // LQR wall release height above the surface (m); < 0: the renderer's default
 };
 
 struct StudyParameters {

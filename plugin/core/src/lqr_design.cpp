@@ -1,8 +1,11 @@
 #include "uhaptics/core/lqr_design.hpp"
 
+#include <Eigen/Cholesky>
 #include <Eigen/Eigenvalues>
+#include <algorithm>
 #include <cmath>
 #include <complex>
+#include <limits>
 #include <sstream>
 #include <unsupported/Eigen/MatrixFunctions>
 
@@ -129,13 +132,180 @@ LqrDesign designLqrWithIntegrators(const LqrDesignRequest& req) {
   const Eigen::Index na = d.design_plant.A.rows();
   MatX Q = MatX::Zero(na, na);
   Q.topLeftCorner(n + p, n + p) = req.Q;
-  d.dare = solveDare(d.design_plant.A, d.design_plant.B, Q, req.R, req.dare);
-  d.K = d.dare.K;
+  MatX R = req.R, N;
+  if (req.input_rate_weight.size() > 0) {
+    const MatX& W = req.input_rate_weight;
+    if (W.rows() != m || W.cols() != m) throw Error("designLqrWithIntegrators: the input-rate weight must be m x m");
+    if (req.input_delay_samples < 1) throw Error("designLqrWithIntegrators: the input-rate weight needs a delay state (D >= 1)");
+    // (u_k - S z)^T W (u_k - S z), S z = u_{k-1}: Q += S^T W S, R += W, cross term N = -S^T W.
+    Q.block(n + p, n + p, m, m) += W;
+    R += W;
+    N = MatX::Zero(na, m);
+    N.block(n + p, 0, m, m) = -W;
+  }
+  if (req.random_input_delay) {
+    if (req.input_delay_samples < 1) throw Error("designLqrWithIntegrators: a random delay needs D >= 1");
+    const std::vector<StateSpace> modes = randomInputDelayModes(d.discrete, req.input_delay_samples);
+    std::vector<MatX> As, Bs;
+    for (const StateSpace& mode : modes) {
+      As.push_back(mode.A);
+      Bs.push_back(mode.B);
+    }
+    const std::vector<double> prob(modes.size(), 1.0 / static_cast<double>(modes.size()));
+    d.random = solveRandomParameterLqr(As, Bs, prob, Q, R, N, req.random_options);
+    d.K = d.random.K;
+    MatX mean_cl = MatX::Zero(na, na);
+    for (std::size_t i = 0; i < modes.size(); ++i) mean_cl += prob[i] * (As[i] - Bs[i] * d.K);
+    d.fastest_pole_rad_s = fastestPoleRadPerSecond(mean_cl, req.period);
+  } else {
+    if (N.size() > 0) throw Error("designLqrWithIntegrators: the input-rate weight is implemented for random delays only");
+    d.dare = solveDare(d.design_plant.A, d.design_plant.B, Q, R, req.dare);
+    d.K = d.dare.K;
+    d.fastest_pole_rad_s = fastestPoleRadPerSecond(d.design_plant.A - d.design_plant.B * d.K, req.period);
+  }
   d.Kc = d.K.leftCols(n);
   d.Ki = d.K.middleCols(n, p);
   d.Kd = d.K.rightCols(na - n - p);
-  d.fastest_pole_rad_s = fastestPoleRadPerSecond(d.design_plant.A - d.design_plant.B * d.K, req.period);
   return d;
+}
+
+}  // namespace uhaptics
+
+namespace uhaptics {
+
+std::vector<StateSpace> randomInputDelayModes(const StateSpace& d, int max_delay) {
+  if (max_delay < 1) throw Error("randomInputDelayModes: the largest delay must be >= 1 sample");
+  const StateSpace fixed = augmentWithInputDelay(d, max_delay);  // checks sizes; mode max_delay
+  const Eigen::Index n = d.A.rows(), m = d.B.cols();
+  std::vector<StateSpace> modes;
+  for (int delay = 0; delay <= max_delay; ++delay) {
+    StateSpace mode = fixed;
+    mode.A.block(0, n, n, max_delay * m).setZero();
+    if (delay == 0) mode.B.topRows(n) = d.B;  // u_k acts now (and still enters the queue)
+    else mode.A.block(0, n + (delay - 1) * m, n, m) = d.B;
+    modes.push_back(std::move(mode));
+  }
+  return modes;
+}
+
+namespace {
+
+void checkRandomParameterInput(const std::vector<MatX>& A, const std::vector<MatX>& B, const std::vector<double>& p,
+                               const MatX& Q, const MatX& R, const MatX& N) {
+  if (A.empty() || A.size() != B.size() || A.size() != p.size())
+    throw Error("solveRandomParameterLqr: need one A, one B and one probability per mode");
+  const Eigen::Index n = A[0].rows(), m = B[0].cols();
+  double sum = 0.0;
+  for (std::size_t i = 0; i < A.size(); ++i) {
+    if (A[i].rows() != n || A[i].cols() != n || B[i].rows() != n || B[i].cols() != m)
+      throw Error("solveRandomParameterLqr: inconsistent mode sizes");
+    if (!A[i].allFinite() || !B[i].allFinite()) throw Error("solveRandomParameterLqr: mode contains NaN or Inf");
+    if (!(p[i] >= 0.0)) throw Error("solveRandomParameterLqr: probabilities must be >= 0");
+    sum += p[i];
+  }
+  if (std::abs(sum - 1.0) > 1e-12) throw Error("solveRandomParameterLqr: probabilities must sum to 1");
+  if (Q.rows() != n || Q.cols() != n || R.rows() != m || R.cols() != m || (N.size() > 0 && (N.rows() != n || N.cols() != m)))
+    throw Error("solveRandomParameterLqr: Q must be n x n, R m x m, N n x m");
+  if (!Q.allFinite() || !R.allFinite() || !N.allFinite()) throw Error("solveRandomParameterLqr: weights contain NaN or Inf");
+}
+
+// The expectations E[A^T P A], E[A^T P B] (+ N), R + E[B^T P B] of one Riccati step.
+struct RiccatiTerms {
+  MatX AtPA, AtPB, H;
+};
+RiccatiTerms riccatiTerms(const std::vector<MatX>& A, const std::vector<MatX>& B, const std::vector<double>& p,
+                          const MatX& R, const MatX& N, const MatX& P) {
+  RiccatiTerms t;
+  const Eigen::Index n = A[0].rows(), m = B[0].cols();
+  t.AtPA = MatX::Zero(n, n);
+  t.AtPB = N.size() > 0 ? N : MatX::Zero(n, m);
+  t.H = R;
+  MatX PA(n, n), PB(n, m);
+  for (std::size_t i = 0; i < A.size(); ++i) {
+    if (p[i] == 0.0) continue;
+    PA.noalias() = P * A[i];
+    PB.noalias() = P * B[i];
+    t.AtPA.noalias() += p[i] * A[i].transpose() * PA;
+    t.AtPB.noalias() += p[i] * A[i].transpose() * PB;
+    t.H.noalias() += p[i] * B[i].transpose() * PB;
+  }
+  return t;
+}
+
+// Q + E[A^T P A] - (E[A^T P B] + N) H^-1 (...)^T, and the gain H^-1 (E[B^T P A] + N^T).
+MatX riccatiStep(const RiccatiTerms& t, const MatX& Q, MatX* K) {
+  Eigen::LLT<MatX> llt(t.H);
+  if (llt.info() != Eigen::Success) throw Error("solveRandomParameterLqr: R + E[B^T P B] is not positive definite");
+  MatX gain = llt.solve(t.AtPB.transpose());
+  MatX next = Q + t.AtPA - t.AtPB * gain;
+  next = 0.5 * (next + next.transpose()).eval();
+  if (K) *K = std::move(gain);
+  return next;
+}
+
+}  // namespace
+
+double randomParameterRiccatiResidual(const std::vector<MatX>& A, const std::vector<MatX>& B,
+                                      const std::vector<double>& p, const MatX& Q, const MatX& R, const MatX& N,
+                                      const MatX& P) {
+  checkRandomParameterInput(A, B, p, Q, R, N);
+  const RiccatiTerms t = riccatiTerms(A, B, p, R, N, P);
+  const MatX next = riccatiStep(t, Q, nullptr);
+  return (P - next).norm() / std::max(Q.norm() + t.AtPA.norm(), std::numeric_limits<double>::min());
+}
+
+double meanSquareSpectralRadius(const std::vector<MatX>& F, const std::vector<double>& p, int iterations) {
+  if (F.empty() || F.size() != p.size() || iterations < 1) throw Error("meanSquareSpectralRadius: bad input");
+  const Eigen::Index n = F[0].rows();
+  MatX X = MatX::Identity(n, n) / std::sqrt(static_cast<double>(n)), next(n, n);
+  // Geometric mean of the growth over the last half (the first half lets the dominant mode win).
+  double log_growth = 0.0;
+  int counted = 0;
+  for (int k = 0; k < iterations; ++k) {
+    next.setZero();
+    for (std::size_t i = 0; i < F.size(); ++i) next.noalias() += p[i] * F[i] * X * F[i].transpose();
+    const double norm = next.norm();
+    if (!(norm > 0.0)) return 0.0;  // nilpotent in mean square
+    if (!std::isfinite(norm)) return std::numeric_limits<double>::infinity();
+    if (k >= iterations / 2) {
+      log_growth += std::log(norm);
+      ++counted;
+    }
+    X = next / norm;
+  }
+  return std::exp(log_growth / counted);
+}
+
+RandomParameterLqrResult solveRandomParameterLqr(const std::vector<MatX>& A, const std::vector<MatX>& B,
+                                                 const std::vector<double>& p, const MatX& Q, const MatX& R,
+                                                 const MatX& N, const RandomParameterLqrOptions& options) {
+  checkRandomParameterInput(A, B, p, Q, R, N);
+  RandomParameterLqrResult out;
+  const Eigen::Index n = A[0].rows();
+  MatX P = MatX::Zero(n, n);
+  bool converged = false;
+  for (int k = 0; k < options.max_iterations; ++k) {
+    MatX next = riccatiStep(riccatiTerms(A, B, p, R, N, P), Q, nullptr);
+    if (!next.allFinite()) throw Error("solveRandomParameterLqr: the Riccati iteration diverged (not mean-square stabilizable?)");
+    const double change = (next - P).norm() / std::max(next.norm(), std::numeric_limits<double>::min());
+    P = std::move(next);
+    out.iterations = k + 1;
+    if (change < options.tolerance) {
+      converged = true;
+      break;
+    }
+  }
+  if (!converged) throw Error("solveRandomParameterLqr: the Riccati iteration did not converge");
+  riccatiStep(riccatiTerms(A, B, p, R, N, P), Q, &out.K);
+  out.P = P;
+  out.relative_residual = randomParameterRiccatiResidual(A, B, p, Q, R, N, P);
+  if (!(out.relative_residual <= options.max_relative_residual))
+    throw Error("solveRandomParameterLqr: residual check failed");
+  std::vector<MatX> F;
+  for (std::size_t i = 0; i < A.size(); ++i) F.push_back(A[i] - B[i] * out.K);
+  out.mean_square_spectral_radius = meanSquareSpectralRadius(F, p);
+  if (!(out.mean_square_spectral_radius < 1.0)) throw Error("solveRandomParameterLqr: the closed loop is not mean-square stable");
+  return out;
 }
 
 }  // namespace uhaptics

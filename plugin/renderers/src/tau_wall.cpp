@@ -17,7 +17,11 @@ struct ControllerDesign {
 };
 
 ControllerDesign designController(const TauModel& model, const Vec6& operating_pose, const LqrWallWeights& w,
-                                  int command_delay, bool check_preconditions) {
+                                  const CommandDelayDesign& delay, bool check_preconditions) {
+  const int command_delay = delay.samples;
+  if (delay.random && command_delay < 1) throw Error("designLqrWall: a random command delay needs samples >= 1");
+  if (!(delay.rate_weight >= 0.0) || (delay.rate_weight > 0.0 && !delay.random))
+    throw Error("designLqrWall: the input-rate weight must be >= 0 and is for the random-delay design only");
   if (!(w.velocity >= 0 && w.position >= 0 && w.integral > 0 && w.torque > 0))
     throw Error("designLqrWall: weights must be non-negative (integral and torque weights positive)");
   if (command_delay < 0 || command_delay > kMaxCommandDelay)
@@ -50,19 +54,24 @@ ControllerDesign designController(const TauModel& model, const Vec6& operating_p
   req.R = MatX::Identity(6, 6) * w.torque;
   req.period = model.servoPeriod();
   req.input_delay_samples = command_delay;
+  req.random_input_delay = delay.random;
+  if (delay.rate_weight > 0.0) req.input_rate_weight = MatX::Identity(6, 6) * delay.rate_weight;
   req.dare.check_preconditions = check_preconditions;
   const LqrDesign d = designLqrWithIntegrators(req);
   gains.Kc = d.Kc;
   gains.Ki = d.Ki;
   gains.command_delay = command_delay;
+  gains.random_command_delay = delay.random;
+  gains.rate_weight = delay.rate_weight;
+  gains.ms_spectral_radius = d.random.mean_square_spectral_radius;
   gains.Kd.leftCols(6 * command_delay) = d.Kd;
   Eigen::PartialPivLU<Mat6> lu(gains.Ki);
   if (!(lu.rcond() > 1e-12)) throw Error("designLqrWall: integral gain is singular; bumpless entry impossible");
   gains.Ki_inverse = lu.inverse();
   gains.period = req.period;
   gains.fastest_pole_rad_s = d.fastest_pole_rad_s;
-  gains.dare_residual = d.dare.relative_residual;
-  gains.dare_iterations = d.dare.iterations;
+  gains.dare_residual = delay.random ? d.random.relative_residual : d.dare.relative_residual;
+  gains.dare_iterations = delay.random ? d.random.iterations : d.dare.iterations;
   gains.operating_torque = data.gravity;
   out.discrete_A = d.discrete.A;
   out.discrete_B = d.discrete.B;
@@ -73,7 +82,14 @@ ControllerDesign designController(const TauModel& model, const Vec6& operating_p
 
 LqrWallGains designLqrWall(const TauModel& model, const Vec6& operating_pose, const LqrWallWeights& w,
                            const ObserverNoise& noise, int command_delay) {
-  ControllerDesign design = designController(model, operating_pose, w, command_delay, true);
+  CommandDelayDesign delay;
+  delay.samples = command_delay;
+  return designLqrWall(model, operating_pose, w, noise, delay);
+}
+
+LqrWallGains designLqrWall(const TauModel& model, const Vec6& operating_pose, const LqrWallWeights& w,
+                           const ObserverNoise& noise, const CommandDelayDesign& delay) {
+  ControllerDesign design = designController(model, operating_pose, w, delay, true);
   LqrWallGains& gains = design.gains;
   const MatX& Ad = design.discrete_A;
   const MatX& Bd = design.discrete_B;
@@ -107,7 +123,11 @@ LqrWallGains redesignLqrWallGains(const TauModel& model, const Vec6& operating_p
                                   const LqrWallWeights& w) {
   // The structure (stabilizability/detectability) does not change with the operating point inside
   // the singularity-free workspace; the residual and closed-loop checks still run on every solve.
-  LqrWallGains gains = designController(model, operating_pose, w, designed.command_delay, false).gains;
+  CommandDelayDesign delay;
+  delay.samples = designed.command_delay;
+  delay.random = designed.random_command_delay;
+  delay.rate_weight = designed.rate_weight;
+  LqrWallGains gains = designController(model, operating_pose, w, delay, false).gains;
   gains.observer_joints = designed.observer_joints;
   gains.observer_torque = designed.observer_torque;
   gains.observer_A = designed.observer_A;
@@ -132,8 +152,13 @@ Vec6 LqrJointRegulator::inFlightTerm() const noexcept {
 }
 
 void LqrJointRegulator::observe(const Vec6& q_measured) noexcept {
-  // The command that drove the plant over the last period: issued command_delay periods before it.
-  const Vec6& acting = commanded(1 + gains_.command_delay);
+  // The command that drove the plant over the last period: issued command_delay periods before it
+  // (random delay: the expectation, the mean of the commands it may have been).
+  Vec6 acting = commanded(1 + gains_.command_delay);
+  if (gains_.random_command_delay) {
+    for (int j = 1; j <= gains_.command_delay; ++j) acting += commanded(j);
+    acting /= static_cast<double>(gains_.command_delay + 1);
+  }
   const Vec<18> predicted = gains_.observer_A * estimate_ + gains_.observer_B * (acting - gains_.observer_torque);
   const Vec6 innovation = q_measured - gains_.observer_joints - predicted.segment<6>(6);
   estimate_ = predicted + gains_.observer_gain * innovation;

@@ -67,6 +67,11 @@ struct LqrWallGains {
   // Delay-aware design (command_delay D > 0): the plant applies the command of D periods ago, and
   // Kd (first 6 D columns) acts on the commands in flight (u_{k-1} - u0, ..., u_{k-D} - u0).
   int command_delay = 0;
+  // Random-delay design: the plant applies u_{k-d}, d ~ U{0..command_delay} i.i.d. each period
+  // (Kd on command_delay queued commands, the observer fed the expected applied command).
+  bool random_command_delay = false;
+  double rate_weight = 0.0;         // input-rate weight of the random-delay design
+  double ms_spectral_radius = 0.0;  // mean-square closed-loop radius of the random-delay design
   Mat<6, 6 * kMaxCommandDelay> Kd = Mat<6, 6 * kMaxCommandDelay>::Zero();
   Mat6 Ki_inverse = Mat6::Zero();      // for bumpless entry
   double period = 1e-3;
@@ -85,6 +90,13 @@ struct LqrWallGains {
   Mat<18, 6> observer_gain = Mat<18, 6>::Zero();  // current-estimate Kalman gain
 };
 
+/// How the wall's LQR accounts for the command delay.
+struct CommandDelayDesign {
+  int samples = 0;           // fixed delay D, or the largest delay of the random model (<= kMaxCommandDelay)
+  bool random = false;       // true: d ~ U{0..samples} drawn i.i.d. each period (generalized Riccati)
+  double rate_weight = 0.0;  // weight on (u_k - u_{k-1})^2 per joint, (N m)^-2 (random model only)
+};
+
 /// Linearize the model at the operating pose (at rest, holding gravity), augment with integrators,
 /// ZOH-discretize at the model's servo period, augment with `command_delay` commands in flight
 /// (0..kMaxCommandDelay; 0: the undelayed design), solve the DARE, split the gain; then design the
@@ -93,6 +105,9 @@ struct LqrWallGains {
 /// Set-up code.
 LqrWallGains designLqrWall(const TauModel& model, const Vec6& operating_pose, const LqrWallWeights& weights = {},
                            const ObserverNoise& noise = {}, int command_delay = 0);
+/// The same with an explicit delay model (fixed or i.i.d. random, with an input-rate weight).
+LqrWallGains designLqrWall(const TauModel& model, const Vec6& operating_pose, const LqrWallWeights& weights,
+                           const ObserverNoise& noise, const CommandDelayDesign& delay);
 
 /// Gain-only redesign at a new operating pose (e.g. each new contact point), fast enough for one
 /// servo period: linearize + augment + ZOH + DARE + gain, for the command delay `designed` was made
