@@ -253,12 +253,17 @@ TEST_CASE("palpation: stiff ellipsoid is stronger and heavier along u, both with
   // within 15 %.
   CHECK(stiff_case.inertia_identified == Approx(stiff_case.inertia_model).epsilon(0.15));
   CHECK(free_case.inertia_identified == Approx(free_case.inertia_model).epsilon(0.15));
-  // Viscous friction (FME gradient paused during the identification, see runPalpation): positive
-  // and ordered as in the paper; the free value recovers the reflected joint friction (25 %: the
-  // Coulomb term, smoothed in the simulator, trades against it); the stiff one comes out 40 % high
-  // with the Coulomb part correspondingly low, so only a loose bound holds there.
+  // Friction (FME gradient paused during the identification, see runPalpation): positive and ordered
+  // as in the paper, and both terms recover the model's back-drive friction along u, (J# u)^T f(q_dot)
+  // at the samples' joint velocities, within 25 % (free viscous: the guide's compliance across u
+  // couples the cross-axis inertia into v, +0.01 N s/m on 0.06). The no-self-motion reflection
+  // u^T J#^T B J# u is not the reference: the paused self-motion moves the joints otherwise (README).
+  INFO("free viscous " << free_case.friction_identified << " vs " << free_case.friction_reference << ", stiff "
+                       << stiff_case.friction_identified << " vs " << stiff_case.friction_reference);
   CHECK(free_case.friction_identified > 0.0);
   CHECK(stiff_case.friction_identified > free_case.friction_identified);
-  CHECK(free_case.friction_identified == Approx(free_case.friction_model).epsilon(0.25));
-  CHECK(stiff_case.friction_identified == Approx(stiff_case.friction_model).epsilon(0.6));
+  CHECK(free_case.friction_identified == Approx(free_case.friction_reference).epsilon(0.25));
+  CHECK(stiff_case.friction_identified == Approx(stiff_case.friction_reference).epsilon(0.25));
+  CHECK(free_case.coulomb_identified == Approx(free_case.coulomb_reference).epsilon(0.25));
+  CHECK(stiff_case.coulomb_identified == Approx(stiff_case.coulomb_reference).epsilon(0.25));
 }

@@ -110,8 +110,14 @@ struct PalpationCase {
   double peak_force = 0.0;  // largest rendered force along u during the push [N]
   // The model's values along u (guided motion), averaged over the identification samples:
   double inertia_model = 0.0;  // u^T Lambda u [kg]
-  double friction_model = 0.0; // u^T J#^T B J# u, joint viscous friction reflected along u [N s/m]
-  double coulomb_model = 0.0;  // sum_i c_i |(J# u)_i|, joint Coulomb friction reflected along u [N]
+  // Joint friction reflected along u as if the joints moved as q_dot = J# v (no self-motion):
+  double friction_model = 0.0; // u^T J#^T B J# u, viscous [N s/m]
+  double coulomb_model = 0.0;  // sum_i c_i |(J# u)_i|, Coulomb [N]
+  // The model's back-drive friction along u, (J# u)^T f(q_dot) at the samples' joint velocities
+  // (self-motion included), fitted with the identifier's regressors: what the identification should
+  // recover.
+  double friction_reference = 0.0;  // viscous [N s/m]
+  double coulomb_reference = 0.0;   // Coulomb [N]
   double inertia_identified = 0.0;  // least squares [kg]
   double friction_identified = 0.0; // viscous Phi [N s/m]
   double coulomb_identified = 0.0;  // constant (Coulomb) part of the back-drive force [N]
