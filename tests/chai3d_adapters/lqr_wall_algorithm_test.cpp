@@ -90,7 +90,7 @@ struct TauScene {
 
 }  // namespace
 
-TEST_CASE("LQR wall algorithm: a 12 N push into a rigid mesh stays under 1 mm; the spring does not",
+TEST_CASE("LQR wall algorithm: a 12 N push into a rigid mesh stays under 1 mm, the spring does not",
           "[chai3d_adapters][lqr_algorithm]") {
   TauScene lqr_scene(true);
   REQUIRE(lqr_scene.tool->start());

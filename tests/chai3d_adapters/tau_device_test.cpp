@@ -104,7 +104,7 @@ TEST_CASE("tau: free space holds gravity, forces flow through J^T", "[chai3d_ada
   CHECK(v.z() > 2.0 * std::max(std::abs(v.x()), std::abs(v.y())));
 }
 
-TEST_CASE("tau: the LQR wall holds a 12 N push against a rigid mesh under 1 mm; the spring does not",
+TEST_CASE("tau: the LQR wall holds a 12 N push against a rigid mesh under 1 mm, the spring does not",
           "[chai3d_adapters][tau]") {
   const Result lqr = pushIntoBlock(cTauDevice::C_TAU_WALL_AUTO, 6000.0);
   CHECK(lqr.lqr_engaged);

@@ -105,7 +105,7 @@ double workOverClosedLoops(Renderer& r, double rate_hz, int loops) {
 }
 }  // namespace
 
-TEST_CASE("exo energy: the subspace proxy generates no energy over closed finger motions; the "
+TEST_CASE("exo energy: the subspace proxy generates no energy over closed finger motions, the "
           "standard method does") {
   // With the proxy still, the nonlinear subspace proxy is a spring towards a fixed q*_a: conservative
   // in q_a, so the work over a closed cycle is only the zero-order-hold term k/2 sum(dl^2), which

@@ -486,7 +486,7 @@ const ExoFingerModel& exo() {
 }
 }  // namespace
 
-TEST_CASE("Exoskeleton forward kinematics: exact round trips for every real configuration; every other "
+TEST_CASE("Exoskeleton forward kinematics: exact round trips for every real configuration, every other "
           "reading is flagged by inWorkingRange") {
   // The closed-form map q -> x solves two loop closures with acos. Outside the assembly region the
   // model continues it by clamping (finite and continuous, so iterative solvers may step there) and

@@ -141,8 +141,8 @@ void printCounts(const StressCounts<N>& s) {
 }
 }  // namespace
 
-TEST_CASE("FME controller (RHI 4-DoF, 3-DoF example): random, out-of-range, non-finite, singular states; "
-          "gains 1e0..1e9; irregular time stamps") {
+TEST_CASE("FME controller (RHI 4-DoF, 3-DoF example): random, out-of-range, non-finite, singular states, "
+          "gains 1e0..1e9, irregular time stamps") {
   const int per_set = 300 * stress::scale();
   StressCounts<4> rhi;
   rhi.tally.what = "rhi4 FME null-space controller";
@@ -287,10 +287,10 @@ void energyChecks(const char* device) {
 }
 }  // namespace
 
-TEST_CASE("RHI energy: the null-space damping is dissipative; the full controller's figures are reported") {
+TEST_CASE("RHI energy: the null-space damping is dissipative, the full controller's figures are reported") {
   energyChecks<4>("rhi4");
 }
 
-TEST_CASE("3-DoF example energy: the null-space damping is dissipative; the full controller's figures are reported") {
+TEST_CASE("3-DoF example energy: the null-space damping is dissipative, the full controller's figures are reported") {
   energyChecks<3>("planar3");
 }

@@ -100,7 +100,7 @@ void hammer(Renderer& r, stress::AdversarialSource& src, int episodes, int ticks
 }
 }  // namespace
 
-TEST_CASE("TAU walls: random, out-of-range, non-finite and singular states, surfaces and poses; weights "
+TEST_CASE("TAU walls: random, out-of-range, non-finite and singular states, surfaces and poses, weights "
           "and stiffnesses 1e0..1e9") {
   stress::AdversarialSource src(20261123);
   const int episodes = 20 * stress::scale(), ticks = 40;
@@ -295,7 +295,7 @@ void printRun(const char* what, const EnergyRun& e) {
 }
 }  // namespace
 
-TEST_CASE("TAU energy: the spring wall with the device damping generates no energy, without it it does; "
+TEST_CASE("TAU energy: the spring wall with the device damping generates no energy, without it it does, "
           "the LQR wall's figure is reported") {
   // Colgate & Schenkel (1997): a sampled virtual spring K on a device with physical damping b is
   // passive iff b > K T / 2 (no rendered damping). Paper 001's baseline: K = 6000 N/m, T = 1 ms,
