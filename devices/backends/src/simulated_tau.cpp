@@ -27,6 +27,7 @@ void SimulatedTau::reset(const Vec6& q0) {
   if (model_.forward(q_, data_) != Fault::kNone) throw Error("SimulatedTau: forward kinematics fails at the start pose");
   for (auto& c : command_history_) c.setZero();
   history_head_ = 0;
+  started_ = false;
   applied_.setZero();
   hand_attached_ = false;
   hand_force_.setZero();
@@ -52,8 +53,14 @@ void SimulatedTau::quantize() noexcept {
 
 Fault SimulatedTau::step(const Vec6& tau_command, const Vec3& external_force) noexcept {
   // Transport delay: the plant applies the command issued d samples ago, d ~ U{0..max}.
+  const Vec6 command = tau_command.allFinite() ? tau_command : Vec6::Zero();
+  // The first command after reset() stands for the commands before the run (the device was held
+  // at rest by the same controller), so a delayed plant does not start from a zero torque.
+  if (!started_)
+    for (Vec6& c : command_history_) c = command;
+  started_ = true;
   history_head_ = (history_head_ + 1) % command_history_.size();
-  command_history_[history_head_] = tau_command.allFinite() ? tau_command : Vec6::Zero();
+  command_history_[history_head_] = command;
   std::size_t delay = 0;
   if (options_.max_delay_samples > 0)
     delay = std::uniform_int_distribution<std::size_t>(0, static_cast<std::size_t>(options_.max_delay_samples))(rng_);

@@ -70,6 +70,7 @@ class SimulatedTau {
   Vec6 q_ = Vec6::Zero(), qd_ = Vec6::Zero(), reading_ = Vec6::Zero(), applied_ = Vec6::Zero();
   std::vector<Vec6> command_history_;  // ring buffer of the last max_delay + 1 commands
   std::size_t history_head_ = 0;
+  bool started_ = false;  // a command has been applied since reset()
   std::mt19937_64 rng_;
   bool hand_attached_ = false;
   Vec3 hand_p_ = Vec3::Zero(), hand_v_ = Vec3::Zero(), hand_a_ = Vec3::Zero(), hand_force_ = Vec3::Zero();
