@@ -198,8 +198,10 @@ uhaptics::Fault cTauDevice::servoTick(const ServoInput& a_input, double& a_outpu
       if (m_contact != Contact::kLqr) m_surface.active = false;
     }
     // The wall renderer runs every tick: its observer must be settled when a contact begins, and
-    // in free space it is the gravity compensation.
-    const uhaptics::WallCommand& wall = m_lqr->tick(m_q, m_surface, &m_data->pose);
+    // in free space it is the gravity compensation. Its observer is told the torque the device was
+    // last commanded (m_tau, the application's spring included while the LQR is not engaged), not
+    // only its own share, so the spring's force is not mistaken for the user's push.
+    const uhaptics::WallCommand& wall = m_lqr->tick(m_q, m_surface, &m_data->pose, &m_tau);
     fault = wall.fault;
     m_tau = wall.torque;
     m_lqrEngaged = m_contact == Contact::kLqr && wall.in_contact;

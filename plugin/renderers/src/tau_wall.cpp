@@ -151,11 +151,12 @@ Vec6 LqrJointRegulator::inFlightTerm() const noexcept {
   return term;
 }
 
-void LqrJointRegulator::observe(const Vec6& q_measured) noexcept {
-  // The command that drove the plant over the last period: issued command_delay periods before it
-  // (random delay: the expectation, the mean of the commands it may have been).
-  Vec6 acting = commanded(1 + gains_.command_delay);
-  if (gains_.random_command_delay) {
+void LqrJointRegulator::observe(const Vec6& q_measured, const Vec6* applied) noexcept {
+  // The command that drove the plant over the last period: reported by the device, or else the one
+  // issued command_delay periods before it (random delay: the expectation, the mean of the commands
+  // it may have been).
+  Vec6 acting = applied && applied->allFinite() ? *applied : commanded(1 + gains_.command_delay);
+  if (!(applied && applied->allFinite()) && gains_.random_command_delay) {
     for (int j = 1; j <= gains_.command_delay; ++j) acting += commanded(j);
     acting /= static_cast<double>(gains_.command_delay + 1);
   }
@@ -218,16 +219,20 @@ const WallCommand& LqrWallRenderer::fail(Fault f) noexcept {
   return cmd_;
 }
 
-const WallCommand& LqrWallRenderer::tick(const Vec6& q, const SurfaceContact& contact, const Vec6* pose) noexcept {
+const WallCommand& LqrWallRenderer::tick(const Vec6& q, const SurfaceContact& contact, const Vec6* pose,
+                                         const Vec6* applied) noexcept {
   const Fault f = front_.update(q, contact, pose);
   if (f != Fault::kNone) return fail(f);
   const TauData& data = front_.data();
   // The observer runs in free space too, so the velocity estimate is settled at contact entry.
-  if (!observer_started_) {
+  // On the first tick the observer starts at rest, as if held (the torque reported for the period
+  // before it, often zero at power-up, did not act on the state it starts from).
+  const bool first = !observer_started_;
+  if (first) {
     regulator_.reset(q);
     observer_started_ = true;
   }
-  regulator_.observe(q);
+  regulator_.observe(q, first ? nullptr : applied);
   cmd_.fault = Fault::kNone;
   cmd_.saturated = false;
   if (options_.gravity_compensation) cmd_.torque = data.gravity;

@@ -52,7 +52,10 @@ struct LqrWallWeights {
 /// push does not bias the velocity estimate.
 struct ObserverNoise {
   double velocity_process = 1e-3;  // rad/s per sample (unmodelled accelerations)
-  double disturbance_process = 0.005;  // N m per sample (how fast the user's push may change)
+  // N m per sample: how fast the user's push may change. 0.05 lets a 15 N push (~0.4 N m per joint)
+  // be tracked within ~10 ms; 10x slower (0.005) halves the rendered stiffness and doubles the
+  // force-step deviation (README, TAU section).
+  double disturbance_process = 0.05;
   double position_process = 1e-7;  // rad per sample (keeps the filter DARE well posed)
   double quantization = 0.0;       // encoder std (rad); 0: resolution / sqrt(12) of the model
 };
@@ -130,7 +133,10 @@ class LqrJointRegulator {
   /// Observer at rest at the measured joints, integrator cleared.
   void reset(const Vec6& q_measured) noexcept;
   /// Observer update with the new measurement (call once per tick, before control()).
-  void observe(const Vec6& q_measured) noexcept;
+  /// `applied`: the torque the device reports it applied over the last period (a board echoes the
+  /// sequence number of the command it applied); nullptr: inferred from the delay model (the
+  /// command of command_delay periods ago, or for a random delay the mean of those it may have been).
+  void observe(const Vec6& q_measured, const Vec6* applied = nullptr) noexcept;
   /// The torque actually commanded this tick (after saturation): queued as a command in flight.
   void applied(const Vec6& torque) noexcept {
     head_ = (head_ + 1) % kHistory;
@@ -208,7 +214,10 @@ class LqrWallRenderer {
   /// Swap in gains designed at a new operating point (e.g. each new contact), keeping the state.
   void setGains(const LqrWallGains& gains) noexcept { regulator_.setGains(gains); }
   /// pose: the caller's forward-kinematics result for q (nullptr: computed here).
-  const WallCommand& tick(const Vec6& q, const SurfaceContact& contact, const Vec6* pose = nullptr) noexcept;
+  /// applied: the torque the device reports it applied over the last period (nullptr: unknown; the
+  /// observer then infers it from the delay model, see LqrJointRegulator::observe).
+  const WallCommand& tick(const Vec6& q, const SurfaceContact& contact, const Vec6* pose = nullptr,
+                          const Vec6* applied = nullptr) noexcept;
   const WallCommand& command() const noexcept { return cmd_; }
   const Vec6& reference() const noexcept { return reference_; }
   const Vec6& integralState() const noexcept { return regulator_.integral(); }
