@@ -80,23 +80,29 @@ int main(int argc, char** argv) {
       ->expected(4);
   bool paper_weights = false;
   app.add_flag("--paper-weights", paper_weights, "paper 001's weights Q = diag(I, 1e3 I, 1e7 I), R = I");
-  // 1 sample, not the worst case 3: under a random 0..3 delay the 1-sample design holds the tool on
-  // ideal encoders while the 0- and 3-sample designs lose it (README, TAU section).
-  int delay_design = 1;
+  // The delay variants' LQR is designed for the delay the plant has, d ~ U{0..3} i.i.d. each period
+  // (generalized Riccati equation), with an input-rate weight that keeps the command from
+  // chattering between the commands in flight (README, TAU section).
+  int delay_design = 3;
   app.add_option("--delay-design", delay_design,
-                 "command delay (samples) the LQR of the delay variants is designed for (0: the undelayed design)")
+                 "largest command delay D (samples) the LQR of the delay variants is designed for (0: the undelayed "
+                 "design)")
       ->check(CLI::Range(0, kMaxCommandDelay));
   std::vector<double> delay_weight_list;
   app.add_option("--delay-weights", delay_weight_list, "LQR weights of the delay variants (default: as --weights)")
       ->expected(4);
-  bool delay_random = false;
-  app.add_flag("--delay-random", delay_random,
-               "design the delay variants for the random delay itself, d ~ U{0..D} i.i.d. each period with D = "
-               "--delay-design (generalized Riccati equation)");
-  double delay_rate_weight = 0.0;
+  bool delay_fixed = false;
+  app.add_flag("--delay-fixed", delay_fixed,
+               "design the delay variants for a fixed delay of D = --delay-design samples instead of the random "
+               "d ~ U{0..D}");
+  double delay_rate_weight = 50.0;
   app.add_option("--delay-rate-weight", delay_rate_weight,
-                 "--delay-random only: weight on (u_k - u_{k-1})^2 per joint, (N m)^-2")
+                 "random-delay design only: weight on (u_k - u_{k-1})^2 per joint, (N m)^-2")
       ->check(CLI::NonNegativeNumber);
+  bool applied_unknown = false;
+  app.add_flag("--applied-unknown", applied_unknown,
+               "the observer infers the torque the device applied from the delay model instead of the device's "
+               "report (the protocol's STATE frame echoes the sequence of the command applied)");
   std::vector<double> delay_observer;
   app.add_option("--delay-observer", delay_observer,
                  "observer noise of the delay variants: velocity, disturbance, position process noise, encoder std "
@@ -104,7 +110,7 @@ int main(int argc, char** argv) {
       ->expected(4);
   double delay_release = -1.0;
   app.add_option("--delay-release-distance", delay_release,
-                 "LQR release height above the wall (m) in the delay variants (default: the renderer's 2e-4)");
+                 "LQR release height above the wall (m) in the delay variants (default: hold while the environment reports the contact)");
   bool ideal_encoders = false;
   app.add_flag("--ideal-encoders", ideal_encoders, "ideal joint sensors instead of 4096-count encoders (all variants)");
   CLI11_PARSE(app, argc, argv);
@@ -126,16 +132,16 @@ int main(int argc, char** argv) {
     // The delay variants run the design on the plant augmented with the commands in flight.
     CommandDelayDesign delay_model;
     delay_model.samples = delay_design;
-    delay_model.random = delay_random;
-    delay_model.rate_weight = delay_rate_weight;
+    delay_model.random = !delay_fixed && delay_design > 0;
+    delay_model.rate_weight = delay_model.random ? delay_rate_weight : 0.0;
     ObserverNoise delay_noise;
     if (!delay_observer.empty())
       delay_noise = {delay_observer[0], delay_observer[1], delay_observer[2], delay_observer[3]};
     const LqrWallGains delay_gains = designLqrWall(model, model.homePose(), delay_weights, delay_noise, delay_model);
-    if (delay_random)
+    if (delay_model.random)
       std::printf("random-delay design (d ~ U{0..%d}, rate weight %g): generalized Riccati %d steps, residual %.1e, "
                   "mean-square radius %.4f (state feedback)\n",
-                  delay_design, delay_rate_weight, delay_gains.dare_iterations, delay_gains.dare_residual,
+                  delay_design, delay_model.rate_weight, delay_gains.dare_iterations, delay_gains.dare_residual,
                   delay_gains.ms_spectral_radius);
     const double design_ms =
         std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t_design).count();
@@ -144,12 +150,13 @@ int main(int argc, char** argv) {
                 weights.velocity, weights.position, weights.integral, weights.torque, gains.fastest_pole_rad_s,
                 gains.dare_residual, gains.dare_iterations, design_ms);
 
-    // Requirement checks of paper 001 section III on the design (ideal sensor, workspace centre).
-    // The design (state feedback) as the paper checks it, plus the force step through the renderer's
-    // Kalman observer, which is what the device actually runs.
+    // Requirement checks of paper 001 section III at the workspace centre: on the design (state
+    // feedback, ideal sensor) as the paper checks them, plus the force step as the device runs it,
+    // through the renderer's Kalman observer on the 4096-count encoders.
     const StepResponse step = stepReferenceResponse(model, gains, model.homePose(), 1e-3);
     const double deviation = forceStepDeviation(model, gains, model.homePose(), 15.0);
-    const double deviation_observer = forceStepDeviation(model, gains, model.homePose(), 15.0, Feedback::kObserver);
+    const double deviation_encoders =
+        forceStepDeviation(model, gains, model.homePose(), 15.0, Feedback::kObserverOnEncoders);
 
     const double half = model.workspaceHalfSide();
     const std::size_t points = static_cast<std::size_t>(grid * grid);
@@ -169,6 +176,7 @@ int main(int argc, char** argv) {
         spec.max_delay_samples = kVariants[v].delay;
         spec.quantize = !ideal_encoders;
         spec.lqr_release_distance = kVariants[v].delay > 0 ? delay_release : -1.0;
+        spec.applied_torque_known = !applied_unknown;
         results[job * kNumVariants + v] = simulateRun(model, kVariants[v].delay > 0 ? delay_gains : gains, spec);
       }
       progress.advance();
@@ -187,6 +195,7 @@ int main(int argc, char** argv) {
     std::vector<double> extreme_min(kNumVariants * 2, std::numeric_limits<double>::infinity());
     std::vector<double> extreme_max(kNumVariants * 2, 0.0);
     std::vector<double> max_pen(kNumVariants, 0.0);
+    int delay_runs_over_1mm = 0;  // delay variants: runs above 1 mm or faulted (the tool was lost)
     {
     tools::CsvWriter csv(out + "/points.csv", columns);  // closed (flushed) before plotting
     for (std::size_t p = 0; p < points; ++p) {
@@ -198,6 +207,7 @@ int main(int argc, char** argv) {
           const RunMetrics& m = results[(p * runs + r) * kNumVariants + v];
           faults += m.fault != Fault::kNone;
           variant_faults[v] += m.fault != Fault::kNone;
+          if (kVariants[v].delay > 0) delay_runs_over_1mm += m.max_penetration > 1e-3 || m.fault != Fault::kNone;
           dz1.push_back(m.d_z1);
           kz1.push_back(m.k_z1);
           dzs.push_back(m.d_zs);
@@ -241,12 +251,20 @@ int main(int argc, char** argv) {
     table.addBound("001", "max penetration, LQR", 1e3 * lqr_pen, "< 1 mm", lqr_pen < 1e-3, "mm");
     const double delay_pen = std::max(max_pen[4], max_pen[5]);
     table.addBound("001", "max penetration, LQR, delay 0-3", 1e3 * delay_pen, "< 1.1 mm (paper CoS-D)", delay_pen < 1.1e-3, "mm");
+    // Paper 001's CoS-D: 3 of its 90 runs (scenario 1) above 1 mm.
+    const double delay_over_share = 100.0 * static_cast<double>(delay_runs_over_1mm) / static_cast<double>(2 * jobs);
+    table.addBound("001", "runs above 1 mm, LQR, delay 0-3", delay_over_share, "<= 3.3 % (paper CoS-D: 3 of 90)",
+                   delay_over_share <= 100.0 * 3.0 / 90.0, "%");
     table.addBound("001", "step reference overshoot", step.overshoot_percent, "< 2 %", step.overshoot_percent < 2.0, "%");
     table.addBound("001", "step reference rise time", step.rise_time, "< 0.05 s", step.rise_time < 0.05, "s");
     table.addBound("001", "step reference settling time", step.settling_time, "< 0.1 s", step.settling_time < 0.1, "s");
     table.addBound("001", "15 N force step, max joint deviation", deviation, "< 0.001 rad", deviation < 1e-3, "rad");
-    table.addBound("001", "15 N force step, via the observer", deviation_observer, "< 0.001 rad", deviation_observer < 1e-3,
-                   "rad");
+    // The device senses the joints to one encoder count (0.0015 rad), coarser than the paper's
+    // 0.001 rad bound, so the loop it runs is held to the bound plus one count of sensing error.
+    const double count = model.encoderResolution();
+    table.addBound("001", "15 N force step, observer on the encoders", deviation_encoders,
+                   "< 0.001 rad + 1 count (" + std::to_string(1e-3 + count).substr(0, 6) + " rad)",
+                   deviation_encoders < 1e-3 + count, "rad");
     table.writeCsv(out + "/reproduction.csv");
     std::printf("\n%s\n", table.format().c_str());
     std::printf("%zu query points x %d runs x %zu variants = %zu runs of 3 s; faults: %d\n", points, runs, kNumVariants,

@@ -49,7 +49,9 @@ RunMetrics simulateRun(const TauModel& model, const LqrWallGains& gains, const R
   // Paper 001's controller: the whole pose held at the contact point, bilaterally.
   lqr_options.follow_tangentially = false;
   lqr_options.unilateral = false;
-  if (spec.lqr_release_distance >= 0.0) lqr_options.release_distance = spec.lqr_release_distance;
+  // The renderer's own 0.2 mm release is for interactive, unilateral use; the study holds while the
+  // environment reports the contact (a delayed loop bounces the tool above 0.2 mm after the step).
+  lqr_options.release_distance = spec.lqr_release_distance >= 0.0 ? spec.lqr_release_distance : params.contact_band;
   LqrWallRenderer lqr(model, gains, lqr_options);
   SpringWallRenderer::Options spring_options;
   spring_options.stiffness = params.spring_stiffness;
@@ -82,7 +84,8 @@ RunMetrics simulateRun(const TauModel& model, const LqrWallGains& gains, const R
     contact.point = Vec3(device.pose(0), device.pose(1), 0.0);
     const Vec6* pose = fk == Fault::kNone ? &device.pose : nullptr;
     const WallCommand& cmd =
-        spec.controller == Controller::kLqr ? lqr.tick(q_meas, contact, pose) : spring.tick(q_meas, contact, pose);
+        spec.controller == Controller::kLqr ? lqr.tick(q_meas, contact, pose, spec.applied_torque_known ? &sim.appliedTorque() : nullptr)
+                                            : spring.tick(q_meas, contact, pose);
     if (cmd.fault != Fault::kNone && m.fault == Fault::kNone) {
       m.fault = cmd.fault;
       m.fault_time = t;
@@ -138,7 +141,7 @@ template <typename Observe>
 void regulate(const TauModel& model, const LqrWallGains& gains, Feedback feedback, const Vec6& start_q,
               const Vec6& reference, double duration, double force_time, double force, Observe&& observe) {
   SimulatedTauOptions so;
-  so.quantize = false;
+  so.quantize = feedback == Feedback::kObserverOnEncoders;
   SimulatedTau sim(model, so);
   sim.reset(start_q);
   TauData data(model);

@@ -23,7 +23,12 @@ struct RunSpec {
   int max_delay_samples = 0;    // 0..3 in the paper's delay variant
   bool quantize = true;         // 4096-count encoders (false: ideal joint sensors)
   double duration = 3.0;        // s
-  double lqr_release_distance = -1.0;  // LQR wall release height above the surface (m); < 0: the renderer's default
+  // The device reports the torque it applied over the last period (our protocol's STATE frame echoes
+  // the sequence of the command applied), so the observer need not guess it under a random delay.
+  bool applied_torque_known = true;
+  // LQR release height above the wall (m); < 0: the contact band, i.e. paper 001's controller holds
+  // the pose for as long as the environment reports the contact.
+  double lqr_release_distance = -1.0;
 };
 
 struct StudyParameters {
@@ -69,8 +74,9 @@ struct StepResponse {
 };
 
 /// What the requirement checks feed back: the true joint state (the design itself, as the paper
-/// checks it) or the renderer's Kalman observer (on ideal, unquantized joint readings).
-enum class Feedback { kState, kObserver };
+/// checks it), the renderer's Kalman observer on ideal joint readings, or the observer on the
+/// device's 4096-count encoders (what the device runs).
+enum class Feedback { kState, kObserver, kObserverOnEncoders };
 
 /// Step in the reference pose (tool z by `step` metres) with paper 001's controller structure
 /// (eq. 7, 11): u = g(q) - Kc x - Ki x_i, x measured from the held equilibrium, x_i' = r - q, so the
