@@ -131,15 +131,16 @@ PalpationCase runPalpation(const Rhi4Model& model, FmeEllipsoidMode mode, const 
                            int trials = 10);
 
 // ---- Fig. 10: workspace map of the force-capability ratio ---------------------------------------
-/// Why a point's stiff/free ratio is what it is. Points with ratio <= 1 are checked against a dense
-/// scan of the self-motion manifold (2 deg in the first two link angles, then a descent from its
-/// best point) for both ellipsoids.
+/// Why a point's stiff/free ratio is what it is. Where the ratio comes out <= 1, a dense scan of the
+/// self-motion manifold (2 deg in the first two link angles, then a descent from its best point)
+/// gives the global minimum of each cost; it replaces a match that it undercuts, then the point is
+/// classified.
 enum class RatioKind {
   kUnreachable,          // no configuration within the joint limits reaches x
   kAbove,                // ratio > 1
   kPinnedAtSameStop,     // (b) both matches inside the limit margin of the same bound (same row, side)
   kWeakerGlobalMinimum,  // (a) the matches are the global minima and the stiff one is not stronger
-  kUnexplained,          // ratio <= 1 otherwise: the matching missed a lower minimum (c)
+  kUnexplained,          // ratio <= 1 otherwise: the dense scan found no point within the limits (c)
 };
 const char* toString(RatioKind kind);
 
@@ -147,15 +148,17 @@ struct WorkspacePoint {
   Vec2 x;
   double free_force, stiff_force, ratio;  // NaN when unreachable
   RatioKind kind = RatioKind::kUnreachable;
-  // Filled for ratio <= 1 only:
-  double global_ratio;        // ratio of the dense scan's global minima
-  double free_cost_excess;    // matched minus global cost (> 0: the matching missed the minimum)
+  // Filled where the grid-started matching gave ratio <= 1 only:
+  double global_ratio;        // ratio of the global minima (the final matches)
+  double free_cost_excess;    // grid-started match minus global cost (> 0: it missed the minimum)
   double stiff_cost_excess;
-  double free_limit_distance, stiff_limit_distance;  // of the matches [rad]
+  double free_limit_distance, stiff_limit_distance;  // of the final matches, ratio <= 1 only [rad]
   int free_bound, stiff_bound;  // nearest bound of the matches: 2 j (lower) or 2 j + 1 (upper) of row j
+  bool rematched = false;     // a match was replaced by the dense scan's lower minimum
 };
 /// Grid of spacing `step` over the disc of radius `max_radius` around the base; both ellipsoids are
-/// matched by offline self-motion descent (matchedConfiguration), points with ratio <= 1 classified.
+/// matched by offline self-motion descent (matchedConfiguration; where that gives ratio <= 1 also
+/// from the dense scan's minima), points with ratio <= 1 classified.
 std::vector<WorkspacePoint> workspaceRatioMap(const Rhi4Model& model, double step, double max_radius,
                                               const Vec2& u = Vec2(0.0, 1.0), unsigned threads = 0);
 
