@@ -74,9 +74,9 @@ struct StepResponse {
 };
 
 /// What the requirement checks feed back: the true joint state (the design itself, as the paper
-/// checks it), the renderer's Kalman observer on ideal joint readings, or the observer on the
-/// device's 4096-count encoders (what the device runs).
-enum class Feedback { kState, kObserver, kObserverOnEncoders };
+/// checks it) or the renderer's Kalman observer on the device's 4096-count encoders (what the
+/// device runs).
+enum class Feedback { kState, kObserverOnEncoders };
 
 /// Step in the reference pose (tool z by `step` metres) with paper 001's controller structure
 /// (eq. 7, 11): u = g(q) - Kc x - Ki x_i, x measured from the held equilibrium, x_i' = r - q, so the

@@ -155,8 +155,10 @@ void LqrJointRegulator::observe(const Vec6& q_measured, const Vec6* applied) noe
   // The command that drove the plant over the last period: reported by the device, or else the one
   // issued command_delay periods before it (random delay: the expectation, the mean of the commands
   // it may have been).
-  Vec6 acting = applied && applied->allFinite() ? *applied : commanded(1 + gains_.command_delay);
-  if (!(applied && applied->allFinite()) && gains_.random_command_delay) {
+  // A non-finite report is ignored like a missing one (the tick's own inputs are validated).
+  const bool reported = applied && applied->allFinite();
+  Vec6 acting = reported ? *applied : commanded(1 + gains_.command_delay);
+  if (!reported && gains_.random_command_delay) {
     for (int j = 1; j <= gains_.command_delay; ++j) acting += commanded(j);
     acting /= static_cast<double>(gains_.command_delay + 1);
   }
