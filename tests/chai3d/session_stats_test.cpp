@@ -1,5 +1,6 @@
 // Session statistics: contact episodes with hysteresis, peaks, faults, the JSON file.
 #include <catch2/catch.hpp>
+#include <cmath>
 #include <cstdio>
 #include <fstream>
 #include <sstream>
@@ -53,4 +54,39 @@ TEST_CASE("stats file is complete JSON written atomically", "[chai3d][stats]") {
   CHECK(!std::ifstream(path + ".tmp").good());  // the temporary was renamed away
   std::remove(path.c_str());
   CHECK_THROWS_AS(uhaptics::writeFileAtomically("/nonexistent-dir/x.json", "{}"), uhaptics::Error);
+}
+
+TEST_CASE("renderer figures count and keep maxima, reset on start, and reach the JSON", "[chai3d][stats]") {
+  using Kind = uhaptics::RendererFigure::Kind;
+  SessionStats stats;
+  const int engagements = stats.declareFigure("engagements", Kind::kCount);
+  const int depth = stats.declareFigure("max_penetration_mm", Kind::kMaximum);
+  CHECK_THROWS_AS(stats.declareFigure("engagements", Kind::kCount), uhaptics::Error);
+  stats.start(0.0);
+  {
+    uhaptics::tools::AllocationScope scope;
+    stats.count(engagements);
+    stats.count(engagements, 2);
+    stats.observeMaximum(depth, 0.4);
+    stats.observeMaximum(depth, 0.25);
+    stats.observeMaximum(depth, std::nan(""));
+    stats.count(99);  // unknown ids are ignored, never written out of bounds
+    CHECK(scope.count() == 0);
+  }
+  auto s = stats.snapshot(1.0);
+  REQUIRE(s.figure_count == 2);
+  CHECK(s.figure("engagements")->value == 3.0);
+  CHECK(s.figure("max_penetration_mm")->value == 0.4);
+  CHECK(s.figure("nothing") == nullptr);
+  const std::string json = uhaptics::formatStatsJson(s, "tau", "sim", "lqr wall");
+  CHECK_THAT(json, Catch::Contains("\"renderer_figures\": {\n    \"engagements\": 3,\n    \"max_penetration_mm\": 0.4\n  }"));
+  stats.start(2.0);
+  s = stats.snapshot(3.0);
+  CHECK(s.figure_count == 2);
+  CHECK(s.figure("engagements")->value == 0.0);
+
+  SessionStats full;
+  static const char* const names[] = {"a", "b", "c", "d", "e", "f", "g", "h", "i", "j", "k", "l"};
+  for (const char* name : names) full.declareFigure(name, Kind::kCount);
+  CHECK_THROWS_AS(full.declareFigure("m", Kind::kCount), uhaptics::Error);
 }

@@ -3,9 +3,22 @@ set -euo pipefail
 UH_ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)"
 UH_JOBS="${UH_JOBS:-$(nproc)}"
 
-# Debian packages the build and its figures need (the CHAI3D examples add GLFW/GL/Xvfb).
-UH_PACKAGES=(cmake g++ make libeigen3-dev catch2 libusb-1.0-0-dev libbenchmark-dev libcli11-dev
-             nlohmann-json3-dev python3-matplotlib)
+# Debian packages the build and its figures need. The second line is the CHAI3D layer's: what
+# CHAI3D 3.3 builds against (GL/GLU, X11, ALSA, libusb), GLFW for the scenes and CHAI3D's examples,
+# Xvfb (and xauth, which xvfb-run needs) to run them headless.
+UH_PACKAGES=(cmake ninja-build g++ make git libeigen3-dev catch2 libusb-1.0-0-dev libbenchmark-dev
+             libcli11-dev nlohmann-json3-dev python3-matplotlib
+             libgl1-mesa-dev libglu1-mesa-dev xorg-dev libasound2-dev libglfw3-dev xvfb xauth)
+
+# CHAI3D: the user's build (CHAI3D_DIR) or a source archive/folder (CHAI3D_SOURCE) pass through the
+# environment to CMake. Without either, a CHAI3D archive laid beside the repository
+# (../shared/third_party, as on CI) is used before falling back to fetching CHAI3D's repository.
+# Every build tree of these scripts shares one CHAI3D build, made once in build/chai3d-3.3.0.
+if [ -z "${CHAI3D_DIR:-}" ] && [ -z "${CHAI3D_SOURCE:-}" ] &&
+   [ -f "$UH_ROOT/../shared/third_party/chai3d-3.3.0-src.tar.xz" ]; then
+  export CHAI3D_SOURCE="$(cd "$UH_ROOT/../shared/third_party" && pwd)/chai3d-3.3.0-src.tar.xz"
+fi
+UH_CHAI3D_ARGS=(-DUHAPTICS_CHAI3D_CACHE="${UH_CHAI3D_CACHE:-$UH_ROOT/build/chai3d-3.3.0}")
 
 uh_ensure_packages() {
   local missing=()
@@ -30,8 +43,15 @@ uh_ensure_packages() {
 }
 
 # uh_build <build-dir> [cmake args...]
+# Ninja for new build trees (an existing tree keeps the generator it was made with).
 uh_build() {
   local dir="$1"; shift
-  cmake -S "$UH_ROOT" -B "$dir" -DCMAKE_BUILD_TYPE=Release "$@"
+  uh_configure "$dir" "$@"
   cmake --build "$dir" -j "$UH_JOBS"
+}
+uh_configure() {
+  local dir="$1"; shift
+  local generator=()
+  [ -f "$dir/CMakeCache.txt" ] || generator=(-G Ninja)
+  cmake -S "$UH_ROOT" -B "$dir" "${generator[@]}" -DCMAKE_BUILD_TYPE=Release "${UH_CHAI3D_ARGS[@]}" "$@"
 }

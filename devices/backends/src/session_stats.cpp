@@ -19,6 +19,43 @@ void SessionStats::start(double wall_time) noexcept {
   faults_.store(0);
   peak_force_.store(0.0);
   peak_output_.store(0.0);
+  for (auto& value : figure_values_) value.store(0.0);
+}
+
+int SessionStats::declareFigure(const char* name, RendererFigure::Kind kind) {
+  for (int i = 0; i < figure_count_; ++i) {
+    if (std::string(figures_[static_cast<std::size_t>(i)].name) == name) {
+      throw Error(std::string("renderer figure '") + name + "' declared twice");
+    }
+  }
+  if (figure_count_ >= SessionStatsSnapshot::kMaxFigures) {
+    throw Error("more than " + std::to_string(SessionStatsSnapshot::kMaxFigures) + " renderer figures");
+  }
+  RendererFigure& figure = figures_[static_cast<std::size_t>(figure_count_)];
+  figure.name = name;
+  figure.kind = kind;
+  figure_values_[static_cast<std::size_t>(figure_count_)].store(0.0);
+  return figure_count_++;
+}
+
+void SessionStats::count(int id, std::uint64_t n) noexcept {
+  if (id < 0 || id >= figure_count_) return;
+  auto& value = figure_values_[static_cast<std::size_t>(id)];
+  // Single writer (the servo thread): load + store is exact without a read-modify-write.
+  value.store(value.load(std::memory_order_relaxed) + static_cast<double>(n), std::memory_order_relaxed);
+}
+
+void SessionStats::observeMaximum(int id, double v) noexcept {
+  if (id < 0 || id >= figure_count_ || !std::isfinite(v)) return;
+  auto& value = figure_values_[static_cast<std::size_t>(id)];
+  if (v > value.load(std::memory_order_relaxed)) value.store(v, std::memory_order_relaxed);
+}
+
+const RendererFigure* SessionStatsSnapshot::figure(const std::string& name) const noexcept {
+  for (int i = 0; i < figure_count; ++i) {
+    if (name == figures[static_cast<std::size_t>(i)].name) return &figures[static_cast<std::size_t>(i)];
+  }
+  return nullptr;
 }
 
 void SessionStats::recordTick(double commanded_force, double output_magnitude, bool fault) noexcept {
@@ -51,6 +88,12 @@ SessionStatsSnapshot SessionStats::snapshot(double wall_time) const noexcept {
   s.peak_force = peak_force_.load();
   s.peak_output = peak_output_.load();
   s.faults = faults_.load();
+  s.figure_count = figure_count_;
+  for (int i = 0; i < figure_count_; ++i) {
+    const auto k = static_cast<std::size_t>(i);
+    s.figures[k] = figures_[k];
+    s.figures[k].value = figure_values_[k].load();
+  }
   return s;
 }
 
@@ -83,8 +126,18 @@ std::string formatStatsJson(const SessionStatsSnapshot& stats, const std::string
       << "  \"contact_ticks\": " << stats.contact_ticks << ",\n"
       << "  \"peak_force_N\": " << stats.peak_force << ",\n"
       << "  \"peak_output\": " << stats.peak_output << ",\n"
-      << "  \"faults\": " << stats.faults << "\n"
-      << "}\n";
+      << "  \"faults\": " << stats.faults << ",\n"
+      << "  \"renderer_figures\": {";
+  for (int i = 0; i < stats.figure_count; ++i) {
+    const RendererFigure& figure = stats.figures[static_cast<std::size_t>(i)];
+    out << (i == 0 ? "\n" : ",\n") << "    " << quoted(figure.name) << ": ";
+    if (figure.kind == RendererFigure::Kind::kCount) {
+      out << static_cast<std::uint64_t>(figure.value);
+    } else {
+      out << figure.value;
+    }
+  }
+  out << (stats.figure_count > 0 ? "\n  }\n" : "}\n") << "}\n";
   return out.str();
 }
 

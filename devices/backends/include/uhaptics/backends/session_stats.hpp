@@ -2,13 +2,24 @@
 // What a device session did, for logs and for tests that only see a process from outside (the
 // drop-in test runs an unchanged CHAI3D example and reads this file afterwards). The servo thread
 // records each tick (lock-free, allocation-free); any other thread may take a snapshot and write it.
+#include <array>
 #include <atomic>
 #include <cstdint>
 #include <string>
 
 namespace uhaptics {
 
+/// A figure of the device's own rendering method (e.g. the LQR wall's engagements, its deepest
+/// penetration): a count or a maximum, named by the device.
+struct RendererFigure {
+  enum class Kind { kCount, kMaximum };
+  const char* name = "";  // a string literal of the device class: lives as long as the program
+  Kind kind = Kind::kCount;
+  double value = 0.0;
+};
+
 struct SessionStatsSnapshot {
+  static constexpr int kMaxFigures = 12;
   std::uint64_t ticks = 0;          // servo ticks simulated / sent to the device
   double seconds = 0.0;             // wall time since start()
   double rate_hz = 0.0;             // ticks / seconds
@@ -17,6 +28,11 @@ struct SessionStatsSnapshot {
   double peak_force = 0.0;          // [N] largest commanded (application) force
   double peak_output = 0.0;         // largest actuator command the device method produced (device units)
   std::uint64_t faults = 0;         // ticks that ended with a Fault (zero command sent)
+  /// The device's renderer figures, in the order it declared them.
+  std::array<RendererFigure, kMaxFigures> figures{};
+  int figure_count = 0;
+  /// The figure named name, or nullptr.
+  const RendererFigure* figure(const std::string& name) const noexcept;
 };
 
 class SessionStats {
@@ -33,6 +49,14 @@ class SessionStats {
   void recordFault() noexcept { faults_.fetch_add(1, std::memory_order_relaxed); }
   SessionStatsSnapshot snapshot(double wall_time) const noexcept;
 
+  /// Declares a renderer figure (set-up only, before the servo thread records; name a string
+  /// literal) and returns its id for count()/observeMaximum(). start() zeroes the values and keeps
+  /// the declarations. Throws uhaptics::Error past kMaxFigures or for a repeated name.
+  int declareFigure(const char* name, RendererFigure::Kind kind);
+  /// Servo thread: adds n to a count / raises a maximum (non-finite values are ignored).
+  void count(int id, std::uint64_t n = 1) noexcept;
+  void observeMaximum(int id, double value) noexcept;
+
  private:
   double threshold_;
   bool in_contact_ = false;  // servo thread only
@@ -43,9 +67,13 @@ class SessionStats {
   std::atomic<std::uint64_t> faults_{0};
   std::atomic<double> peak_force_{0.0};
   std::atomic<double> peak_output_{0.0};
+  std::array<RendererFigure, SessionStatsSnapshot::kMaxFigures> figures_{};  // names and kinds
+  std::array<std::atomic<double>, SessionStatsSnapshot::kMaxFigures> figure_values_{};
+  int figure_count_ = 0;
 };
 
-/// One JSON object: the snapshot plus the labels that say what ran.
+/// One JSON object: the snapshot plus the labels that say what ran; the renderer figures are the
+/// object "renderer_figures".
 std::string formatStatsJson(const SessionStatsSnapshot& stats, const std::string& device,
                             const std::string& backend, const std::string& renderer);
 

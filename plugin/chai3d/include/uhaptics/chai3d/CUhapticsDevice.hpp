@@ -152,6 +152,9 @@ class cUhapticsDevice : public cGenericHapticDevice {
   void startBoard(int a_joints, int a_actuators, double* a_positions, double a_timeoutSeconds = 2.0);
   /// Folder of the device parameter files: $UHAPTICS_PARAMS_DIR, else the one this build ships.
   static std::string paramsDirectory();
+  /// The session statistics, for subclasses to declare (constructor) and record (servoTick) the
+  /// figures that show their rendering method at work.
+  uhaptics::SessionStats& sessionStats() noexcept { return m_stats; }
   /// Held during every hook; subclass accessors that read device state take it too.
   std::mutex& deviceMutex() { return m_mutex; }
 

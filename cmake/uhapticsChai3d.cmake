@@ -1,0 +1,188 @@
+# Finds CHAI3D 3.3 for the CHAI3D layer, building it once from source when the user has no build.
+#
+# CHAI3D is in no package registry. In order of preference:
+#   1. CHAI3D_DIR (cache or environment): an existing CHAI3D 3.3 build tree, what a lab that already
+#      uses CHAI3D has (the folder holding chai3dConfig.cmake).
+#   2. CHAI3D_SOURCE (cache or environment): a CHAI3D 3.3.0 source archive (.tar.xz/.tar.gz/.zip) or
+#      an unpacked source folder. An archive is checked against CHAI3D_SOURCE_SHA256, or against the
+#      "<archive>.sha256" file beside it, when either is given.
+#   3. Otherwise the public repository chai3d/chai3d at the 3.3.0 release commit, fetched the way
+#      CMake projects fetch a pinned dependency (FetchContent). Without network this fails within
+#      seconds with a message naming these choices and the opt-out.
+# In cases 2 and 3 CHAI3D's own CMake builds its "chai3d" library (Release, its own flags) into
+# UHAPTICS_CHAI3D_CACHE at configure time, once: a stamp records which source it came from, so a
+# re-configure or a rebuild of uhaptics reuses it, and build trees that name the same cache folder
+# (tools/run-tests: plain, ASan+UBSan, TSan) share one CHAI3D build. A CHAI3D built without
+# sanitizers links into the sanitized uhaptics builds as any uninstrumented library does.
+#
+# uhaptics_provide_chai3d() sets CHAI3D_DIR (the build tree to find_package from; a normal variable,
+# so the cache keeps what the user gave) and UHAPTICS_CHAI3D_ORIGIN (for the configure message).
+
+set(UHAPTICS_CHAI3D_VERSION 3.3.0)
+set(UHAPTICS_CHAI3D_REPOSITORY "https://github.com/chai3d/chai3d.git")
+set(UHAPTICS_CHAI3D_COMMIT 7c76b1f)  # "Release 3.3.0"
+
+foreach(_var CHAI3D_DIR CHAI3D_SOURCE CHAI3D_SOURCE_SHA256)
+  if(NOT ${_var} AND DEFINED ENV{${_var}})
+    set(${_var} "$ENV{${_var}}")
+  endif()
+endforeach()
+set(CHAI3D_DIR "${CHAI3D_DIR}" CACHE PATH "An existing CHAI3D 3.3 build tree (the folder holding chai3dConfig.cmake)")
+set(CHAI3D_SOURCE "${CHAI3D_SOURCE}" CACHE FILEPATH "CHAI3D 3.3.0 source archive or folder, built by uhaptics when CHAI3D_DIR is not set")
+set(CHAI3D_SOURCE_SHA256 "${CHAI3D_SOURCE_SHA256}" CACHE STRING "Expected sha256 of the CHAI3D_SOURCE archive (optional)")
+set(UHAPTICS_CHAI3D_CACHE "${CMAKE_BINARY_DIR}/_chai3d" CACHE PATH
+    "Where uhaptics builds CHAI3D when CHAI3D_DIR is not set; build trees that name the same folder share one CHAI3D build")
+
+# The message every failure ends with: the three ways to provide CHAI3D and the opt-out.
+set(_uh_chai3d_ways
+    "Provide CHAI3D in one of three ways:\n"
+    "  -DCHAI3D_DIR=<an existing CHAI3D 3.3 build tree>        (or CHAI3D_DIR in the environment)\n"
+    "  -DCHAI3D_SOURCE=<chai3d-3.3.0 source .tar.xz or folder> (or CHAI3D_SOURCE in the environment)\n"
+    "  network access to ${UHAPTICS_CHAI3D_REPOSITORY} (commit ${UHAPTICS_CHAI3D_COMMIT} is fetched)\n"
+    "or build without the CHAI3D layer: -DUHAPTICS_WITH_CHAI3D=OFF")
+
+function(_uh_chai3d_fail what)
+  string(CONCAT _ways ${_uh_chai3d_ways})
+  message(FATAL_ERROR "uhaptics: ${what}\n${_ways}")
+endfunction()
+
+# Unpacks or fetches the CHAI3D source into <cache>/source; sets <out_dir> to the source folder and
+# <out_id> to a string that identifies it (for the stamp).
+function(_uh_chai3d_obtain_source out_dir out_id)
+  set(_cache "${UHAPTICS_CHAI3D_CACHE}")
+  if(CHAI3D_SOURCE)
+    get_filename_component(_source "${CHAI3D_SOURCE}" ABSOLUTE)
+    if(IS_DIRECTORY "${_source}")
+      if(NOT EXISTS "${_source}/src/chai3d.h" OR NOT EXISTS "${_source}/CMakeLists.txt")
+        _uh_chai3d_fail("CHAI3D_SOURCE=${_source} is a folder without CHAI3D's sources (no src/chai3d.h)")
+      endif()
+      set(${out_dir} "${_source}" PARENT_SCOPE)
+      set(${out_id} "folder ${_source}" PARENT_SCOPE)
+      return()
+    endif()
+    if(NOT EXISTS "${_source}")
+      _uh_chai3d_fail("CHAI3D_SOURCE=${_source} does not exist")
+    endif()
+    file(SHA256 "${_source}" _actual)
+    set(_expected "${CHAI3D_SOURCE_SHA256}")
+    if(NOT _expected AND EXISTS "${_source}.sha256")
+      file(STRINGS "${_source}.sha256" _line LIMIT_COUNT 1)
+      string(REGEX MATCH "^[0-9a-fA-F]+" _expected "${_line}")
+    endif()
+    if(_expected AND NOT _actual STREQUAL _expected)
+      _uh_chai3d_fail("CHAI3D_SOURCE=${_source} has sha256 ${_actual}, expected ${_expected}")
+    endif()
+    set(_id "archive sha256 ${_actual}")
+    if(EXISTS "${_cache}/source/src/chai3d.h" AND EXISTS "${_cache}/source.id")
+      file(READ "${_cache}/source.id" _old)
+      if(_old STREQUAL _id)
+        set(${out_dir} "${_cache}/source" PARENT_SCOPE)
+        set(${out_id} "${_id}" PARENT_SCOPE)
+        return()
+      endif()
+    endif()
+    message(STATUS "uhaptics: unpacking CHAI3D from ${_source}")
+    file(REMOVE_RECURSE "${_cache}/source" "${_cache}/unpack")
+    file(ARCHIVE_EXTRACT INPUT "${_source}" DESTINATION "${_cache}/unpack")
+    file(GLOB _top LIST_DIRECTORIES true "${_cache}/unpack/*")
+    list(LENGTH _top _count)
+    if(NOT _count EQUAL 1 OR NOT EXISTS "${_top}/src/chai3d.h")
+      _uh_chai3d_fail("CHAI3D_SOURCE=${_source} does not unpack to one CHAI3D source folder")
+    endif()
+    file(RENAME "${_top}" "${_cache}/source")
+    file(REMOVE_RECURSE "${_cache}/unpack")
+    file(WRITE "${_cache}/source.id" "${_id}")
+    set(${out_dir} "${_cache}/source" PARENT_SCOPE)
+    set(${out_id} "${_id}" PARENT_SCOPE)
+    return()
+  endif()
+
+  # The public repository. Ask it first, with a short timeout, so that a machine without network
+  # gets the choices at once instead of a clone that hangs.
+  set(_id "git ${UHAPTICS_CHAI3D_REPOSITORY} ${UHAPTICS_CHAI3D_COMMIT}")
+  if(NOT (EXISTS "${_cache}/source/src/chai3d.h" AND EXISTS "${_cache}/source.id"))
+    find_package(Git QUIET)
+    if(NOT GIT_EXECUTABLE)
+      _uh_chai3d_fail("neither CHAI3D_DIR nor CHAI3D_SOURCE is set, and git is not installed to fetch CHAI3D")
+    endif()
+    execute_process(COMMAND "${GIT_EXECUTABLE}" ls-remote --heads "${UHAPTICS_CHAI3D_REPOSITORY}"
+                    RESULT_VARIABLE _rc OUTPUT_QUIET ERROR_VARIABLE _err TIMEOUT 20)
+    if(NOT _rc EQUAL 0)
+      string(STRIP "${_err}" _err)
+      _uh_chai3d_fail("neither CHAI3D_DIR nor CHAI3D_SOURCE is set, and ${UHAPTICS_CHAI3D_REPOSITORY} "
+                      "cannot be reached (${_rc}: ${_err})")
+    endif()
+    message(STATUS "uhaptics: fetching CHAI3D ${UHAPTICS_CHAI3D_VERSION} (${UHAPTICS_CHAI3D_COMMIT}) from ${UHAPTICS_CHAI3D_REPOSITORY}")
+    include(FetchContent)
+    FetchContent_Populate(uhaptics_chai3d
+      GIT_REPOSITORY "${UHAPTICS_CHAI3D_REPOSITORY}"
+      GIT_TAG "${UHAPTICS_CHAI3D_COMMIT}"
+      SOURCE_DIR "${_cache}/source"
+      SUBBUILD_DIR "${_cache}/fetch"
+      BINARY_DIR "${_cache}/fetch-unused"
+      QUIET)
+    file(WRITE "${_cache}/source.id" "${_id}")
+  endif()
+  set(${out_dir} "${_cache}/source" PARENT_SCOPE)
+  set(${out_id} "${_id}" PARENT_SCOPE)
+endfunction()
+
+function(uhaptics_provide_chai3d)
+  if(CHAI3D_DIR)
+    set(UHAPTICS_CHAI3D_ORIGIN "the CHAI3D build given by CHAI3D_DIR" PARENT_SCOPE)
+    return()
+  endif()
+
+  set(_cache "${UHAPTICS_CHAI3D_CACHE}")
+  file(MAKE_DIRECTORY "${_cache}")
+  # Two configures sharing the cache (parallel build trees) build CHAI3D once.
+  file(LOCK "${_cache}/.lock" GUARD FUNCTION TIMEOUT 3600)
+  _uh_chai3d_obtain_source(_source _id)
+
+  set(_build "${_cache}/build")
+  set(_stamp "${_build}/uhaptics-built-from.txt")
+  if(EXISTS "${_stamp}" AND EXISTS "${_build}/chai3dConfig.cmake")
+    file(READ "${_stamp}" _built)
+    if(_built STREQUAL _id)
+      set(CHAI3D_DIR "${_build}" PARENT_SCOPE)
+      set(UHAPTICS_CHAI3D_ORIGIN "the CHAI3D uhaptics built earlier from ${_id}" PARENT_SCOPE)
+      return()
+    endif()
+  endif()
+
+  include(ProcessorCount)
+  ProcessorCount(_jobs)
+  if(_jobs EQUAL 0)
+    set(_jobs 2)
+  endif()
+  set(_log "${_cache}/build.log")
+  message(STATUS "uhaptics: building CHAI3D ${UHAPTICS_CHAI3D_VERSION}'s library from ${_source} into ${_build} "
+                 "(once; about 5 minutes on 2 cores; log: ${_log})")
+  file(REMOVE_RECURSE "${_build}")
+  # Only CHAI3D's library is built; its examples are compiled by uhaptics' drop-in tests.
+  # CMAKE_EXPORT_NO_PACKAGE_REGISTRY: CHAI3D's export(PACKAGE) would otherwise register the build
+  # in ~/.cmake for every other project on the machine.
+  execute_process(
+    COMMAND "${CMAKE_COMMAND}" -S "${_source}" -B "${_build}" -G "${CMAKE_GENERATOR}"
+            -DCMAKE_BUILD_TYPE=Release
+            -DCMAKE_C_COMPILER=${CMAKE_C_COMPILER} -DCMAKE_CXX_COMPILER=${CMAKE_CXX_COMPILER}
+            -DCMAKE_EXPORT_NO_PACKAGE_REGISTRY=ON
+    RESULT_VARIABLE _rc OUTPUT_FILE "${_log}" ERROR_FILE "${_log}.err")
+  if(_rc EQUAL 0)
+    execute_process(COMMAND "${CMAKE_COMMAND}" --build "${_build}" --target chai3d -j ${_jobs}
+                    RESULT_VARIABLE _rc OUTPUT_FILE "${_log}" ERROR_FILE "${_log}.err")
+  endif()
+  if(NOT _rc EQUAL 0)
+    file(READ "${_log}.err" _err)
+    string(LENGTH "${_err}" _length)
+    if(_length GREATER 4000)
+      math(EXPR _from "${_length} - 4000")
+      string(SUBSTRING "${_err}" ${_from} 4000 _err)
+    endif()
+    _uh_chai3d_fail("building CHAI3D from ${_source} failed (${_rc}); see ${_log} and ${_log}.err:\n${_err}\n"
+                    "(CHAI3D needs Debian's libgl1-mesa-dev libglu1-mesa-dev libusb-1.0-0-dev xorg-dev libasound2-dev)")
+  endif()
+  file(WRITE "${_stamp}" "${_id}")
+  set(CHAI3D_DIR "${_build}" PARENT_SCOPE)
+  set(UHAPTICS_CHAI3D_ORIGIN "CHAI3D built by uhaptics from ${_id}" PARENT_SCOPE)
+endfunction()
