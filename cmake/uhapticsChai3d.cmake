@@ -41,9 +41,11 @@ set(_uh_chai3d_ways
     "  network access to ${UHAPTICS_CHAI3D_REPOSITORY} (commit ${UHAPTICS_CHAI3D_COMMIT} is fetched)\n"
     "or build without the CHAI3D layer: -DUHAPTICS_WITH_CHAI3D=OFF")
 
-function(_uh_chai3d_fail what)
+# _uh_chai3d_fail(<text>...): the pieces are joined into one message.
+function(_uh_chai3d_fail)
+  string(CONCAT _what ${ARGV})
   string(CONCAT _ways ${_uh_chai3d_ways})
-  message(FATAL_ERROR "uhaptics: ${what}\n${_ways}")
+  message(FATAL_ERROR "uhaptics: ${_what}\n${_ways}")
 endfunction()
 
 # Unpacks or fetches the CHAI3D source into <cache>/source; sets <out_dir> to the source folder and

@@ -75,6 +75,10 @@ TEST_CASE("config file selects, the environment overrides", "[chai3d][selection]
   CHECK(s.hand.stiffness == 90.0);
   REQUIRE(s.hand.waypoints.size() == 3);
   CHECK(s.hand.waypoints[1].y() == 0.2);
+  CHECK(s.hand_path_given);
+  CHECK_FALSE(readDeviceSelection(kDevices, kBackends, [](const char* a_name) -> const char* {
+                return std::string(a_name) == "UHAPTICS_DEVICE" ? "exo" : nullptr;
+              }).hand_path_given);  // no file: the device's own default motion
   CHECK(s.option("coupling_stiffness", 1.0, 0.0, 1e4) == 250.0);
   CHECK_THROWS_WITH(s.option("coupling_stiffness", 1.0, 0.0, 100.0), Catch::Contains("coupling_stiffness"));
   s.options["coupling_stiffness"] = 300.0;  // set in code: wins over the file

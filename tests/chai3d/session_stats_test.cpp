@@ -90,3 +90,17 @@ TEST_CASE("renderer figures count and keep maxima, reset on start, and reach the
   for (const char* name : names) full.declareFigure(name, Kind::kCount);
   CHECK_THROWS_AS(full.declareFigure("m", Kind::kCount), uhaptics::Error);
 }
+
+TEST_CASE("session stats keep the box of visited positions", "[chai3d][stats]") {
+  SessionStats stats;
+  stats.start(0.0);
+  CHECK(stats.snapshot(1.0).visited_min[0] > stats.snapshot(1.0).visited_max[0]);  // empty before a tick
+  stats.recordPosition(0.1, -0.2, 0.3);
+  stats.recordPosition(-0.5, 0.4, std::nan(""));  // ignored whole: a non-finite reading is no position
+  stats.recordPosition(0.2, -0.3, 0.0);
+  const auto s = stats.snapshot(1.0);
+  CHECK(s.visited_min == std::array<double, 3>{0.1, -0.3, 0.0});
+  CHECK(s.visited_max == std::array<double, 3>{0.2, -0.2, 0.3});
+  CHECK_THAT(uhaptics::formatStatsJson(s, "exo", "sim", "x"), Catch::Contains("\"visited_min_radii\": [0.1, -0.3, 0]"));
+  CHECK_THAT(uhaptics::formatStatsJson(s, "exo", "sim", "x"), Catch::Contains("\"visited_max_radii\": [0.2, -0.2, 0.3]"));
+}

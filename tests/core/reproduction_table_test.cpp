@@ -28,3 +28,26 @@ TEST_CASE("reproduction tables decide pass/fail and round-trip through CSV") {
   CHECK(back.rows()[1].pass == false);
   CHECK(t.format().find("FAIL") != std::string::npos);
 }
+
+TEST_CASE("rows that need unpublished data are shown with their reason and do not fail the run") {
+  ReproductionTable t;
+  t.addWithin("003", "K at home", 123.0, 123.4, 0.5, "-");
+  t.addWithin("003", "Table I force", 8.564, 11.2, 1.3, "N");
+  t.markNeedsData("the base frame is not published");
+  CHECK_FALSE(t.rows()[1].pass);
+  CHECK_FALSE(t.rows()[1].fails());
+  CHECK(t.allPass());
+  CHECK(uhaptics::tools::resultWord(t.rows()[1]) == "needs data");
+  CHECK(t.format().find("needs data: Table I force: the base frame is not published") != std::string::npos);
+  const std::string path = "reproduction_needs_data_test.csv";
+  t.writeCsv(path);
+  const auto back = ReproductionTable::readCsv(path);
+  std::remove(path.c_str());
+  REQUIRE(back.rows().size() == 2);
+  CHECK(back.rows()[1].needs_data == "the base frame is not published");
+  CHECK(back.allPass());
+  // A missed row without a reason still fails; a reason cannot be attached to nothing.
+  t.addWithin("003", "zeta", 3.3, 3.9, 0.05, "-");
+  CHECK_FALSE(t.allPass());
+  CHECK_THROWS(ReproductionTable().markNeedsData("why"));
+}

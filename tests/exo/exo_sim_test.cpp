@@ -90,3 +90,42 @@ TEST_CASE("sim: recorded trajectories are read from CSV and bad files are refuse
   CHECK_THROWS_WITH(FingerTrajectory::fromCsv(model(), "/nonexistent.csv"), Catch::Contains("cannot open"));
   CHECK_THROWS_WITH(ExoFingerSim(model(), t, {1.0, true}), Catch::Contains("update_rate_hz"));
 }
+
+TEST_CASE("sim: a finger follows a fingertip path, reachable points exactly, others at the nearest pose") {
+  const auto tip = [](const Model::TaskVector& x) {
+    ExoFingerPoints p;
+    model().points(x, p);
+    return p.fingertip;
+  };
+  // A circle of fingertip positions the finger reaches (poses inside the 5 % margin the path keeps).
+  const Model::TaskVector lo = model().taskLower(), span = model().taskUpper() - model().taskLower();
+  const auto pose = [&](double t) {
+    return Model::TaskVector(lo + span.cwiseProduct(Model::TaskVector(0.5 + 0.3 * std::cos(2.0 * M_PI * t / 2.0),
+                                                                      0.5 + 0.3 * std::sin(2.0 * M_PI * t / 2.0))));
+  };
+  const auto reachable = FingerTrajectory::followingPath(model(), [&](double t) { return tip(pose(t)); }, 2.0, 6.0, 50.0);
+  CHECK(reachable.duration() == Approx(6.0).margin(0.02));
+  double worst = 0.0;
+  for (double t = 0.0; t <= 6.0; t += 0.02) {  // on the samples and between them (interpolated)
+    worst = std::max(worst, (tip(reachable.at(t)) - tip(pose(t))).norm());
+  }
+  // Sample spacing: 2 s / 100 samples of a ~10 cm loop gives chords ~3 mm: interpolating the
+  // angles between two exact samples departs from the circle by a fraction of a millimetre.
+  CHECK(worst < 5e-4);
+
+  // A target far outside the finger's reach: the pose whose fingertip is nearest, i.e. no pose of
+  // a dense grid inside the same margin comes closer than 0.1 mm.
+  const Vec2 far(1.0, 1.0);
+  const auto unreachable = FingerTrajectory::followingPath(model(), [&](double) { return far; }, 1.0, 1.0, 20.0);
+  const double reached = (tip(unreachable.at(0.5)) - far).norm();
+  double best = 1e9;
+  for (int a = 0; a <= 100; ++a) {
+    for (int b = 0; b <= 100; ++b) {
+      const Model::TaskVector x = lo + 0.05 * span + 0.9 * span.cwiseProduct(Model::TaskVector(0.01 * a, 0.01 * b));
+      best = std::min(best, (tip(x) - far).norm());
+    }
+  }
+  CHECK(reached <= best + 1e-4);
+  CHECK_THROWS_AS(FingerTrajectory::followingPath(model(), [](double) { return Vec2(NAN, 0.0); }, 1.0, 1.0, 20.0),
+                  Error);
+}

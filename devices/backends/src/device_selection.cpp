@@ -28,7 +28,7 @@ bool parseSwitch(const std::string& value, const std::string& where) {
   throw Error(where + " = '" + value + "' must be on or off");
 }
 
-void readHand(const ParamFile& config, ScriptedHandOptions& hand, bool& enabled) {
+void readHand(const ParamFile& config, ScriptedHandOptions& hand, bool& enabled, bool& path_given) {
   if (config.has("hand/enabled")) enabled = config.integer("hand/enabled", 0, 1) != 0;
   hand.lap_time = config.numberOr("hand/lap_time", hand.lap_time, 0.1, 3600.0);
   hand.stiffness = config.numberOr("hand/stiffness", hand.stiffness, 1.0, 5000.0);
@@ -39,6 +39,7 @@ void readHand(const ParamFile& config, ScriptedHandOptions& hand, bool& enabled)
     const auto flat = config.numbers("hand/waypoints", 3 * n, -2.0, 2.0);
     hand.waypoints.clear();
     for (std::size_t i = 0; i < n; ++i) hand.waypoints.emplace_back(flat[3 * i], flat[3 * i + 1], flat[3 * i + 2]);
+    path_given = true;
   }
 }
 
@@ -79,7 +80,7 @@ DeviceSelection readDeviceSelection(const std::vector<std::string>& devices,
       requireOneOf(selection.backend, backends, config.origin() + ": selection/backend", "backend");
     }
     if (config.has("stats")) selection.stats_path = config.text("stats");
-    readHand(config, selection.hand, selection.hand_enabled);
+    readHand(config, selection.hand, selection.hand_enabled, selection.hand_path_given);
   }
   if (const auto device = env("UHAPTICS_DEVICE")) {
     selection.device = *device;

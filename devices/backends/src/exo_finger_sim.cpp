@@ -5,6 +5,7 @@
 #include <fstream>
 #include <sstream>
 
+#include "uhaptics/core/finite_difference.hpp"
 #include "uhaptics/core/regularized_solve.hpp"
 
 namespace uhaptics {
@@ -32,6 +33,102 @@ FingerTrajectory FingerTrajectory::synthesized(const ExoFingerModel& model, doub
                                                               margin + (1.0 - 2.0 * margin) * pip));
   }
   return fromSamples(model, std::move(t), std::move(x), "synthesized trajectory");
+}
+
+namespace {
+
+Vec2 fingertipOf(const ExoFingerModel& model, const ExoFingerModel::TaskVector& x) {
+  ExoFingerPoints points;
+  model.points(x, points);
+  return points.fingertip;
+}
+
+// The finger angles in [lo, hi] whose fingertip is nearest target, from start: Gauss-Newton with
+// an active set on the box (an angle held at a bound the step pushes against drops out and the
+// other one is solved alone), so an unreachable target ends at the nearest point of the edge.
+ExoFingerModel::TaskVector nearestAngles(const ExoFingerModel& model, const Vec2& target,
+                                         const ExoFingerModel::TaskVector& lo, const ExoFingerModel::TaskVector& hi,
+                                         ExoFingerModel::TaskVector x) {
+  const auto tip = [&](const ExoFingerModel::TaskVector& y) { return fingertipOf(model, y); };
+  for (int iteration = 0; iteration < 50; ++iteration) {
+    const Vec2 error = target - tip(x);
+    const Mat2 J = centralDifferenceJacobian(tip, x);
+    bool free[2] = {true, true};
+    Vec2 step = Vec2::Zero();
+    for (int pass = 0; pass < 3; ++pass) {
+      Mat2 Jf = J;
+      for (int i = 0; i < 2; ++i)
+        if (!free[i]) Jf.col(i).setZero();
+      // Damped least squares: defined at a stretched finger and for a dropped column.
+      step = (Jf.transpose() * Jf + 1e-12 * Mat2::Identity()).ldlt().solve(Jf.transpose() * error);
+      bool changed = false;
+      for (int i = 0; i < 2; ++i) {
+        const bool pushes_out = (x(i) <= lo(i) && step(i) < 0.0) || (x(i) >= hi(i) && step(i) > 0.0);
+        if (free[i] && pushes_out) {
+          free[i] = false;
+          changed = true;
+        }
+      }
+      if (!changed) break;
+    }
+    // Backtracking: far from the finger's reach the residual is large and a full Gauss-Newton step
+    // can overshoot into another basin; only a step that brings the fingertip closer is taken.
+    const double distance = error.norm();
+    ExoFingerModel::TaskVector next = x;
+    for (double scale = 1.0; scale > 1e-4; scale *= 0.5) {
+      const ExoFingerModel::TaskVector trial = (x + scale * step).cwiseMax(lo).cwiseMin(hi);
+      if ((target - tip(trial)).norm() < distance) {
+        next = trial;
+        break;
+      }
+    }
+    const bool settled = (next - x).norm() < 1e-10;
+    x = next;
+    if (settled) break;
+  }
+  return x;
+}
+
+}  // namespace
+
+FingerTrajectory FingerTrajectory::followingPath(const ExoFingerModel& model,
+                                                 const std::function<Vec2(double)>& fingertip_target,
+                                                 double period_s, double duration_s, double sample_rate_hz) {
+  if (!(duration_s > 0.0 && duration_s < 3600.0)) throw Error("trajectory duration must lie in (0, 3600) s");
+  if (!(period_s > 0.05 && period_s < 600.0)) throw Error("trajectory period must lie in (0.05, 600) s");
+  if (!(sample_rate_hz >= 10.0 && sample_rate_hz <= 1e5)) throw Error("trajectory rate must lie in [10, 1e5] Hz");
+  // The same 5 % margin off the joint ranges as the synthesized cycles.
+  const ExoFingerModel::TaskVector full = model.taskUpper() - model.taskLower();
+  const ExoFingerModel::TaskVector lo = model.taskLower() + 0.05 * full, span = 0.9 * full;
+  const auto per_period = static_cast<std::size_t>(std::ceil(period_s * sample_rate_hz));
+  std::vector<ExoFingerModel::TaskVector> period(per_period);
+  for (std::size_t i = 0; i < per_period; ++i) {
+    const Vec2 target = fingertip_target(period_s * static_cast<double>(i) / static_cast<double>(per_period));
+    if (!target.allFinite()) throw Error("fingertip path is not finite at sample " + std::to_string(i));
+    ExoFingerModel::TaskVector start = i > 0 ? period[i - 1] : lo + 0.5 * span;
+    if (i == 0) {  // the nearest point of an 11 x 11 grid: away from a local minimum of the far side
+      double best = (fingertipOf(model, start) - target).norm();
+      for (int a = 0; a <= 10; ++a) {
+        for (int b = 0; b <= 10; ++b) {
+          const ExoFingerModel::TaskVector x = lo + span.cwiseProduct(ExoFingerModel::TaskVector(0.1 * a, 0.1 * b));
+          const double distance = (fingertipOf(model, x) - target).norm();
+          if (distance < best) {
+            best = distance;
+            start = x;
+          }
+        }
+      }
+    }
+    period[i] = nearestAngles(model, target, lo, lo + span, start);
+  }
+  const auto n = static_cast<std::size_t>(std::ceil(duration_s * sample_rate_hz)) + 1;
+  std::vector<double> t(n);
+  std::vector<ExoFingerModel::TaskVector> x(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    t[i] = static_cast<double>(i) * period_s / static_cast<double>(per_period);
+    x[i] = period[i % per_period];
+  }
+  return fromSamples(model, std::move(t), std::move(x), "fingertip path");
 }
 
 FingerTrajectory FingerTrajectory::synthesizedAround(const ExoFingerModel& model,

@@ -12,6 +12,7 @@ namespace uhaptics {
 
 void SessionStats::start(double wall_time) noexcept {
   in_contact_ = false;
+  in_contact_now_.store(false);
   start_time_.store(wall_time);
   ticks_.store(0);
   contacts_.store(0);
@@ -20,6 +21,19 @@ void SessionStats::start(double wall_time) noexcept {
   peak_force_.store(0.0);
   peak_output_.store(0.0);
   for (auto& value : figure_values_) value.store(0.0);
+  visited_any_.store(false);
+}
+
+void SessionStats::recordPosition(double x, double y, double z) noexcept {
+  if (!std::isfinite(x) || !std::isfinite(y) || !std::isfinite(z)) return;
+  const double p[3] = {x, y, z};
+  const bool first = !visited_any_.load(std::memory_order_relaxed);
+  for (std::size_t i = 0; i < 3; ++i) {
+    if (first || p[i] < visited_min_[i].load(std::memory_order_relaxed)) visited_min_[i].store(p[i], std::memory_order_relaxed);
+    if (first || p[i] > visited_max_[i].load(std::memory_order_relaxed)) visited_max_[i].store(p[i], std::memory_order_relaxed);
+  }
+  // Release: a snapshot that sees the flag sees the first position too.
+  if (first) visited_any_.store(true, std::memory_order_release);
 }
 
 int SessionStats::declareFigure(const char* name, RendererFigure::Kind kind) {
@@ -69,6 +83,7 @@ void SessionStats::recordTick(double commanded_force, double output_magnitude, b
     in_contact_ = false;
   }
   if (in_contact_) contact_ticks_.fetch_add(1, std::memory_order_relaxed);
+  in_contact_now_.store(in_contact_, std::memory_order_relaxed);
   // Single writer: plain load/store keeps the maxima exact without a compare-exchange loop.
   if (commanded_force > peak_force_.load(std::memory_order_relaxed)) {
     peak_force_.store(commanded_force, std::memory_order_relaxed);
@@ -88,6 +103,13 @@ SessionStatsSnapshot SessionStats::snapshot(double wall_time) const noexcept {
   s.peak_force = peak_force_.load();
   s.peak_output = peak_output_.load();
   s.faults = faults_.load();
+  s.in_contact = in_contact_now_.load();
+  if (visited_any_.load(std::memory_order_acquire)) {
+    for (std::size_t i = 0; i < 3; ++i) {
+      s.visited_min[i] = visited_min_[i].load();
+      s.visited_max[i] = visited_max_[i].load();
+    }
+  }
   s.figure_count = figure_count_;
   for (int i = 0; i < figure_count_; ++i) {
     const auto k = static_cast<std::size_t>(i);
@@ -127,6 +149,11 @@ std::string formatStatsJson(const SessionStatsSnapshot& stats, const std::string
       << "  \"peak_force_N\": " << stats.peak_force << ",\n"
       << "  \"peak_output\": " << stats.peak_output << ",\n"
       << "  \"faults\": " << stats.faults << ",\n"
+      << "  \"in_contact\": " << (stats.in_contact ? "true" : "false") << ",\n"
+      << "  \"visited_min_radii\": [" << stats.visited_min[0] << ", " << stats.visited_min[1] << ", "
+      << stats.visited_min[2] << "],\n"
+      << "  \"visited_max_radii\": [" << stats.visited_max[0] << ", " << stats.visited_max[1] << ", "
+      << stats.visited_max[2] << "],\n"
       << "  \"renderer_figures\": {";
   for (int i = 0; i < stats.figure_count; ++i) {
     const RendererFigure& figure = stats.figures[static_cast<std::size_t>(i)];

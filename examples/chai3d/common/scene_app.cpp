@@ -23,6 +23,14 @@ int parseFrames(const std::string& a_text) {
   return static_cast<int>(value);
 }
 
+// CHAI3D 3.3's ~cViewport deletes its view panel twice: once with the camera whose front layer holds
+// it, once directly. Detaching the panel first leaves one owner, so the viewport can be deleted.
+class OwnedViewport : public chai3d::cViewport {
+ public:
+  using chai3d::cViewport::cViewport;
+  ~OwnedViewport() override { m_cameraViewport->m_frontLayer->removeChild(m_viewPanel); }
+};
+
 }  // namespace
 
 SceneOptions SceneOptions::parse(int argc, char** argv) {
@@ -86,12 +94,11 @@ SceneApp::SceneApp(const std::string& a_title, const SceneOptions& a_options, in
   m_font = chai3d::NEW_CFONT_CALIBRI_20();
   float scale_x = 1.0f, scale_y = 1.0f;
   glfwGetWindowContentScale(m_window, &scale_x, &scale_y);
-  m_viewport = new chai3d::cViewport(m_camera, scale_x, scale_y);
+  m_viewport = new OwnedViewport(m_camera, scale_x, scale_y);
 }
 
 SceneApp::~SceneApp() {
-  // m_viewport is not deleted: CHAI3D 3.3's ~cViewport deletes its view panel twice (once as a
-  // child of its own camera); CHAI3D's examples never delete theirs either.
+  delete m_viewport;
   delete m_world;  // with its children (camera, light, tool, objects)
   glfwDestroyWindow(m_window);
   glfwTerminate();

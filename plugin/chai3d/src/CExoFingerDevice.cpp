@@ -92,15 +92,26 @@ void cExoFingerDevice::startBackend() {
     updateState(0.0);
     return;
   }
-  // The user: flexion-extension cycles for half an hour (the sim's longest; then the finger rests),
-  // or a finger held still when the hand is off.
-  uhaptics::FingerTrajectory trajectory =
-      getScriptedHandEnabled()
-          ? uhaptics::FingerTrajectory::synthesized(model, 1800.0, m_selection.hand.lap_time, 20.0)
-          : uhaptics::FingerTrajectory::fromSamples(model, {0.0, 1.0},
-                                                    {0.5 * (model.taskLower() + model.taskUpper()),
-                                                     0.5 * (model.taskLower() + model.taskUpper())},
-                                                    "finger at rest");
+  // The user, for half an hour (the sim's longest; then the finger rests): with a hand path chosen
+  // for the scene, the finger whose fingertip follows it as closely as the finger can; otherwise
+  // paper 000's flexion-extension cycles; a finger held still when the hand is off.
+  const auto fingerTrajectory = [&]() {
+    const Model::TaskVector rest = 0.5 * (model.taskLower() + model.taskUpper());
+    if (!getScriptedHandEnabled()) return uhaptics::FingerTrajectory::fromSamples(model, {0.0, 1.0}, {rest, rest}, "finger at rest");
+    if (!m_selection.hand_path_given) {
+      return uhaptics::FingerTrajectory::synthesized(model, 1800.0, m_selection.hand.lap_time, 20.0);
+    }
+    const uhaptics::ScriptedHand hand(m_selection.hand, m_specifications.m_workspaceRadius, uhaptics::Vec3::Zero());
+    return uhaptics::FingerTrajectory::followingPath(
+        model,
+        [&](double a_t) {
+          uhaptics::Vec3 anchor, velocity;
+          hand.anchor(a_t, anchor, velocity);
+          return uhaptics::Vec2(deviceToPlanar(anchor) + m_centre);  // device frame -> hand frame
+        },
+        m_selection.hand.lap_time, 1800.0, 50.0);
+  };
+  uhaptics::FingerTrajectory trajectory = fingerTrajectory();
   uhaptics::ExoFingerSimOptions options;
   options.update_rate_hz = 1.0 / getServoPeriod();
   options.force_loop_lag = m_selection.option("force_loop_lag", 1.0, 0.0, 1.0) != 0.0;

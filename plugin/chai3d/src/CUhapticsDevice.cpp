@@ -199,6 +199,10 @@ void cUhapticsDevice::tickLocked() noexcept {
   m_lastFault = servoTick(input, output);
   ++m_ticks;
   m_stats.recordTick(sendForce ? m_commandForce.norm() : 0.0, output, m_lastFault != uhaptics::Fault::kNone);
+  const double radius = m_specifications.m_workspaceRadius;
+  if (radius > 0.0) {
+    m_stats.recordPosition(m_state.position.x() / radius, m_state.position.y() / radius, m_state.position.z() / radius);
+  }
 }
 
 void cUhapticsDevice::advanceLocked(bool a_oneTick) noexcept {

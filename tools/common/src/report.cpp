@@ -23,6 +23,7 @@ std::string paperTitle(const std::string& paper) {
   if (paper == "000") return "Paper 000 — subspace proxy for an underactuated finger exoskeleton";
   if (paper == "001") return "Paper 001 — LQR position-control wall on the TAU device";
   if (paper == "003") return "Paper 003 — force-manipulability null-space control of a redundant interface";
+  if (paper == "chai3d") return "The plugin in CHAI3D — CHAI3D's own examples, unchanged, with each device";
   return "Paper " + paper;
 }
 
@@ -67,16 +68,18 @@ std::vector<ExperimentResult> collectExperiments(const std::string& root) {
 
 std::string renderMarkdown(const std::vector<ExperimentResult>& experiments,
                            const std::vector<std::pair<std::string, std::string>>& metadata) {
-  std::size_t rows = 0, passed = 0;
+  std::size_t rows = 0, passed = 0, needs_data = 0;
   for (const auto& e : experiments)
     for (const auto& r : e.table.rows()) {
       ++rows;
       passed += r.pass ? 1 : 0;
+      needs_data += (!r.pass && !r.needs_data.empty()) ? 1 : 0;
     }
   std::ostringstream md;
   md << "# uhaptics reproduction report\n\n";
-  md << "**" << passed << " of " << rows << " checks pass** across " << experiments.size()
-     << " experiments.\n\n";
+  md << "**" << passed << " of " << rows << " checks pass** across " << experiments.size() << " experiments";
+  if (needs_data > 0) md << "; " << needs_data << " cannot be decided without data the papers do not publish";
+  md << ".\n\n";
   if (!metadata.empty()) {
     md << "| run | |\n|---|---|\n";
     for (const auto& [k, v] : metadata) md << "| " << markdownCell(k) << " | " << markdownCell(v) << " |\n";
@@ -94,7 +97,11 @@ std::string renderMarkdown(const std::vector<ExperimentResult>& experiments,
     for (const auto& r : e.table.rows())
       md << "| " << markdownCell(r.quantity) << " | " << fmt(r.published) << " | " << fmt(r.measured) << " | "
          << markdownCell(r.unit) << " | " << markdownCell(r.criterion) << " | "
-         << (r.pass ? "pass" : "**FAIL**") << " |\n";
+         << (r.pass ? "pass" : r.needs_data.empty() ? "**FAIL**" : "needs data") << " |\n";
+    md << "\n";
+    for (const auto& r : e.table.rows())
+      if (!r.pass && !r.needs_data.empty())
+        md << "- **needs data** — " << markdownCell(r.quantity) << ": " << r.needs_data << "\n";
     md << "\n";
     if (!e.summary.empty()) md << "```\n" << e.summary << (e.summary.back() == '\n' ? "" : "\n") << "```\n\n";
     for (const auto& f : e.figures) md << "![" << f << "](" << f << ")\n\n";

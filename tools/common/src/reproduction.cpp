@@ -54,20 +54,30 @@ void ReproductionTable::addBound(const std::string& paper, const std::string& qu
        pass && std::isfinite(measured), unit});
 }
 
+void ReproductionTable::markNeedsData(const std::string& reason) {
+  if (rows_.empty() || reason.empty()) throw std::logic_error("markNeedsData needs a row and a reason");
+  rows_.back().needs_data = reason;
+}
+
 bool ReproductionTable::allPass() const noexcept {
   for (const auto& r : rows_)
-    if (!r.pass) return false;
+    if (r.fails()) return false;
   return true;
+}
+
+std::string resultWord(const ReproductionRow& row) {
+  if (row.pass) return "pass";
+  return row.needs_data.empty() ? "FAIL" : "needs data";
 }
 
 void ReproductionTable::writeCsv(const std::string& path) const {
   std::ofstream out(path, std::ios::trunc);
   if (!out) throw std::runtime_error(path + ": cannot write");
-  out << "paper,quantity,published,measured,criterion,pass,unit\n";
+  out << "paper,quantity,published,measured,criterion,pass,unit,needs_data\n";
   out.precision(10);
   for (const auto& r : rows_)
     out << cell(r.paper) << ',' << cell(r.quantity) << ',' << r.published << ',' << r.measured << ','
-        << cell(r.criterion) << ',' << (r.pass ? "pass" : "FAIL") << ',' << cell(r.unit) << '\n';
+        << cell(r.criterion) << ',' << resultWord(r) << ',' << cell(r.unit) << ',' << cell(r.needs_data) << '\n';
 }
 
 ReproductionTable ReproductionTable::readCsv(const std::string& path) {
@@ -79,8 +89,8 @@ ReproductionTable ReproductionTable::readCsv(const std::string& path) {
   while (std::getline(in, line)) {
     if (line.empty()) continue;
     const auto c = splitCsvLine(line);
-    if (c.size() != 7) throw std::runtime_error(path + ": malformed row: " + line);
-    t.add({c[0], c[1], std::stod(c[2]), std::stod(c[3]), c[4], c[5] == "pass", c[6]});
+    if (c.size() != 7 && c.size() != 8) throw std::runtime_error(path + ": malformed row: " + line);
+    t.add({c[0], c[1], std::stod(c[2]), std::stod(c[3]), c[4], c[5] == "pass", c[6], c.size() == 8 ? c[7] : ""});
   }
   return t;
 }
@@ -100,9 +110,11 @@ std::string ReproductionTable::format() const {
     std::snprintf(buf, sizeof buf, "%-5s  %-*s  %12s  %12s  %-8s  %-*s  %s\n", r.paper.c_str(),
                   static_cast<int>(wq), r.quantity.c_str(), number(r.published).c_str(),
                   number(r.measured).c_str(), r.unit.c_str(), static_cast<int>(wc), r.criterion.c_str(),
-                  r.pass ? "pass" : "FAIL");
+                  resultWord(r).c_str());
     os << buf;
   }
+  for (const auto& r : rows_)
+    if (!r.pass && !r.needs_data.empty()) os << "needs data: " << r.quantity << ": " << r.needs_data << "\n";
   return os.str();
 }
 

@@ -32,6 +32,9 @@ struct DeviceSelection {
   std::string stats_path;        // empty: no stats file
   bool hand_enabled = true;      // only meaningful with the sim backend
   ScriptedHandOptions hand;
+  /// The configuration named the hand's waypoints (a path chosen for a scene). Position-driven
+  /// devices (the exoskeleton's finger) then follow the path instead of their own default motion.
+  bool hand_path_given = false;
   std::optional<ParamFile> config;  // for device-specific options ("options/<device>/<name>")
   std::map<std::string, double> options;  // device options set in code; win over the config file
 

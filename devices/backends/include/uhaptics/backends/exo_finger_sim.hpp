@@ -13,6 +13,7 @@
 //
 // The finger is position-driven (an infinitely stiff user, the setting of paper 000's Fig. 4):
 // forces do not deflect it, they are recorded as the torques the user feels.
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -41,6 +42,15 @@ class FingerTrajectory {
   /// From samples (validated like fromCsv; origin names them in errors).
   static FingerTrajectory fromSamples(const ExoFingerModel& model, std::vector<double> time_s,
                                       std::vector<ExoFingerModel::TaskVector> x, const std::string& origin);
+
+  /// A finger whose fingertip follows a closed path (a scene's visit, e.g. a scripted hand's
+  /// anchor) as closely as its joint ranges allow. fingertip_target(t) [m, hand frame] repeats
+  /// every period_s; one period is sampled at sample_rate_hz, each sample the finger angles whose
+  /// fingertip is nearest the target (projected Gauss-Newton in the angle box, warm-started from
+  /// the previous sample, the first one from a grid), and the period is repeated for duration_s.
+  static FingerTrajectory followingPath(const ExoFingerModel& model,
+                                        const std::function<Vec2(double)>& fingertip_target, double period_s,
+                                        double duration_s, double sample_rate_hz);
 
   /// Joint angles at time t (allocation-free).
   ExoFingerModel::TaskVector at(double t) const noexcept;

@@ -28,6 +28,10 @@ struct SessionStatsSnapshot {
   double peak_force = 0.0;          // [N] largest commanded (application) force
   double peak_output = 0.0;         // largest actuator command the device method produced (device units)
   std::uint64_t faults = 0;         // ticks that ended with a Fault (zero command sent)
+  bool in_contact = false;          // the latest tick was inside a contact episode
+  /// Box of the positions the device visited, in workspace radii around the workspace centre (what
+  /// CHAI3D maps to world units when a tool's workspace radius is 1); empty (min > max) before a tick.
+  std::array<double, 3> visited_min{{1.0, 1.0, 1.0}}, visited_max{{-1.0, -1.0, -1.0}};
   /// The device's renderer figures, in the order it declared them.
   std::array<RendererFigure, kMaxFigures> figures{};
   int figure_count = 0;
@@ -45,6 +49,8 @@ class SessionStats {
   void start(double wall_time) noexcept;
   /// One servo tick. Call from one thread only (the servo thread).
   void recordTick(double commanded_force, double output_magnitude, bool fault) noexcept;
+  /// Where the device is after a tick, in workspace radii (non-finite values are ignored).
+  void recordPosition(double x, double y, double z) noexcept;
   /// A command refused before any tick (e.g. non-finite): counted as a fault, not as a tick.
   void recordFault() noexcept { faults_.fetch_add(1, std::memory_order_relaxed); }
   SessionStatsSnapshot snapshot(double wall_time) const noexcept;
@@ -60,6 +66,7 @@ class SessionStats {
  private:
   double threshold_;
   bool in_contact_ = false;  // servo thread only
+  std::atomic<bool> in_contact_now_{false};  // its copy for snapshots
   std::atomic<double> start_time_{0.0};
   std::atomic<std::uint64_t> ticks_{0};
   std::atomic<std::uint64_t> contacts_{0};
@@ -67,6 +74,8 @@ class SessionStats {
   std::atomic<std::uint64_t> faults_{0};
   std::atomic<double> peak_force_{0.0};
   std::atomic<double> peak_output_{0.0};
+  std::array<std::atomic<double>, 3> visited_min_{}, visited_max_{};
+  std::atomic<bool> visited_any_{false};
   std::array<RendererFigure, SessionStatsSnapshot::kMaxFigures> figures_{};  // names and kinds
   std::array<std::atomic<double>, SessionStatsSnapshot::kMaxFigures> figure_values_{};
   int figure_count_ = 0;

@@ -15,8 +15,9 @@
 // F directly (the standard method) is not.
 //
 // Simulated backend: the finger is position-driven (paper 000's setting), following flexion-
-// extension cycles whose period is the scripted hand's lap time; the device's force loads the
-// finger, it does not deflect it. Board backends (emulated, usb): the same renderer on the board's
+// extension cycles whose period is the scripted hand's lap time, or, when the selection names the
+// hand's waypoints (a path chosen for a scene), moving its fingertip along that path as closely as
+// its joint ranges allow; the device's force loads the finger, it does not deflect it. Board backends (emulated, usb): the same renderer on the board's
 // joint readings; the emulated board's finger follows paper 000's flexion-extension by itself.
 #include <memory>
 

@@ -15,7 +15,15 @@ struct ReproductionRow {
   std::string criterion;  // how pass is decided, human-readable, e.g. "|m - p| <= 0.5" or "< 1 mm"
   bool pass;
   std::string unit;
+  /// Non-empty when the row cannot be decided without data the paper does not publish: why. Such a
+  /// row is shown with its reason and, when it misses, counts as "needs data", not as a failure.
+  std::string needs_data = {};
+  /// Whether the row makes a run fail: it missed and it is decidable from what is published.
+  bool fails() const noexcept { return !pass && needs_data.empty(); }
 };
+
+/// "pass", "FAIL" or "needs data".
+std::string resultWord(const ReproductionRow& row);
 
 class ReproductionTable {
  public:
@@ -27,8 +35,12 @@ class ReproductionTable {
   void addBound(const std::string& paper, const std::string& quantity, double measured,
                 const std::string& criterion, bool pass, const std::string& unit);
   const std::vector<ReproductionRow>& rows() const noexcept { return rows_; }
+  /// No row fails (rows that need unpublished data do not count).
   bool allPass() const noexcept;
-  /// Columns: paper,quantity,published,measured,criterion,pass,unit.
+  /// Marks the last row added as needing data the paper does not publish (see ReproductionRow).
+  void markNeedsData(const std::string& reason);
+  /// Columns: paper,quantity,published,measured,criterion,pass,unit,needs_data; the result column
+  /// reads pass, FAIL, or "needs data" for a missed row that needs unpublished data.
   void writeCsv(const std::string& path) const;
   /// Reads what writeCsv wrote (throws std::runtime_error on a malformed file).
   static ReproductionTable readCsv(const std::string& path);
