@@ -5,6 +5,7 @@
 #include "chai3d.h"
 #include "tool_scene.hpp"
 #include "uhaptics/chai3d/CExoFingerDevice.hpp"
+#include "uhaptics/core/finite_difference.hpp"
 #include "uhaptics/core/passivity_observer.hpp"
 #include "uhaptics/tools/alloc_probe.hpp"
 
@@ -125,6 +126,77 @@ TEST_CASE("exo: a stock cToolCursor touching a block renders through the subspac
       // 0.6 % for the hold, 3 % with the force loop). Allow twice that.
       const double allowed = (lag ? 0.06 : 0.012) * 2.0 * stored;
       CHECK(port.energyOut() <= allowed);
+    }
+  }
+}
+
+TEST_CASE("exo: renderer figures: proxy solves, contact ticks, proxy distance and actuator force",
+          "[chai3d_adapters][exo]") {
+  for (const bool with_block : {false, true}) {
+    DYNAMIC_SECTION((with_block ? "touching a block" : "free space")) {
+      auto device = cExoFingerDevice::create(exoSelection(false));
+      device->setLockStep(true);
+      Scene scene(device, with_block);
+      REQUIRE(scene.tool->start());
+      const auto& model = device->getModel();
+      const auto fingertip = [&](const uhaptics::Vec2& x) {
+        uhaptics::ExoFingerPoints points;
+        model.points(x, points);
+        return points.fingertip;
+      };
+      const double coupling = 1.0;  // Z_x: the coupling_stiffness option's default [N m/rad]
+      std::uint64_t pulled = 0, above = 0, near_threshold = 0;
+      double max_distance = 0.0, max_actuator = 0.0;
+      for (int i = 0; i < 4000; ++i) {  // two cycles of the finger's joint motion
+        const uhaptics::Vec2 x = device->getFingerAngles();  // what this tick starts from
+        scene.tick();
+        cVector3d sent;
+        device->getForce(sent);  // the force this tick rendered (lock-step: one tick per call)
+        const uhaptics::Vec2 f(sent.y(), -sent.z());  // the finger plane, hand frame
+        max_actuator = std::max(max_actuator, std::abs(device->getActuatorForce()));
+        if (f.isZero(0.0)) continue;
+        ++pulled;
+        // The proxy target the device solves for: the pull read back through Z_x (class comment).
+        const uhaptics::Mat2 J = uhaptics::centralDifferenceJacobian(fingertip, x);
+        const uhaptics::Vec2 proxy = x + J.transpose() * f / coupling;
+        max_distance = std::max(max_distance, 1e3 * (fingertip(proxy) - fingertip(x)).norm());
+        above += f.norm() > 0.05 ? 1 : 0;  // the statistics' contact threshold [N]
+        near_threshold += std::abs(f.norm() - 0.05) < 0.0005 ? 1 : 0;
+      }
+      const auto stats = device->getSessionStats();
+      REQUIRE(stats.faults == 0);
+      const auto* solves = stats.figure("proxy_solves");
+      const auto* contact_ticks = stats.figure("proxy_contact_ticks");
+      const auto* distance = stats.figure("max_proxy_distance_mm");
+      const auto* actuator = stats.figure("max_actuator_force_N");
+      REQUIRE(solves != nullptr);
+      REQUIRE(contact_ticks != nullptr);
+      REQUIRE(distance != nullptr);
+      REQUIRE(actuator != nullptr);
+      INFO("solves " << solves->value << ", contact ticks " << contact_ticks->value << ", max distance "
+                     << distance->value << " mm, max actuator " << actuator->value << " N; ticks with a pull "
+                     << pulled << ", above 0.05 N " << above);
+      // A solve exactly when the application pulls in the finger plane (free space: none at all).
+      CHECK(solves->value == static_cast<double>(pulled));
+      // Contact ticks: the pull above 0.05 N. The device measures the pull through J_tip^-T J_tip^T,
+      // which is the identity up to rounding and the solve's damping near the straight finger:
+      // only pulls within 1 % of the threshold may fall either way.
+      CHECK(std::abs(contact_ticks->value - static_cast<double>(above)) <= static_cast<double>(near_threshold));
+      // The same model evaluations as the device's: equal to rounding.
+      CHECK(distance->value == Approx(max_distance).epsilon(1e-9).margin(1e-12));
+      CHECK(actuator->value == max_actuator);  // the command itself, exactly
+      if (with_block) {
+        CHECK(above > 100);                 // the finger pressed the block for a real part of each cycle
+        CHECK(distance->value > 0.1);       // millimetres of proxy travel, not numerical dust
+        CHECK(distance->value < 1e3 * 2.0 * device->getSpecifications().m_workspaceRadius);
+        CHECK(actuator->value > 1.0);       // newtons at the actuator
+        CHECK(actuator->value <= model.forceLimit()(0));
+      } else {
+        CHECK(pulled == 0);
+        CHECK(contact_ticks->value == 0.0);
+        CHECK(distance->value == 0.0);
+        CHECK(actuator->value == 0.0);
+      }
     }
   }
 }

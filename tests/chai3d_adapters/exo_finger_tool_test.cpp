@@ -1,7 +1,9 @@
 // cExoFingerTool (multi-point finger) on cExoFingerDevice's simulated backend, no graphics.
 #include <catch2/catch.hpp>
+#include <chrono>
 #include <cmath>
 #include <cstdlib>
+#include <thread>
 
 #include "chai3d.h"
 #include "uhaptics/chai3d/CExoFingerTool.hpp"
@@ -59,6 +61,34 @@ struct FingerScene {
     tool->applyToDevice();
   }
 };
+
+// A steady contact on a resting finger: a box beside the proximal phalanx, the hand (the tool frame)
+// moved 5 mm towards it (2 mm gap), then held, as in "a box pressed on one phalanx" below.
+void pressProximalPhalanx(FingerScene& a_scene, const cExoFingerDevicePtr& a_device) {
+  const uhaptics::Vec2 x = 0.5 * (a_device->getModel().taskLower() + a_device->getModel().taskUpper());
+  const auto phalanx = cExoFingerTool::C_PHALANX_PROXIMAL;
+  const cExoFingerTool::cPhalanxPoint from{phalanx, 0.0}, to{phalanx, 1.0}, mid{phalanx, 0.5};
+  const uhaptics::Vec3 along = (a_scene.tool->position(to, x) - a_scene.tool->position(from, x)).normalized();
+  const uhaptics::Vec3 out = -a_scene.tool->jacobian(mid, x).col(phalanx).normalized();
+  const double length = (a_scene.tool->position(to, x) - a_scene.tool->position(from, x)).norm();
+  const double gap = 0.002, thickness = 0.01;
+  cMatrix3d R;
+  R.setCol0(cVector3d(1, 0, 0));
+  R.setCol1(toChai(along));
+  R.setCol2(toChai(out));
+  a_scene.addBox(toChai(a_scene.tool->position(mid, x) + (gap + kPointRadius + 0.5 * thickness) * out), R, 0.03,
+                 0.5 * length, thickness);
+  REQUIRE(a_scene.tool->start());
+  const int steps = 250;
+  for (int i = 0; i <= steps + 50; ++i) {
+    a_scene.tool->setLocalPos(toChai(std::min(i, steps) * (0.005 / steps) * out));
+    a_scene.tick();
+  }
+}
+
+double secondsSince(std::chrono::steady_clock::time_point a_start) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - a_start).count();
+}
 
 }  // namespace
 
@@ -176,6 +206,93 @@ TEST_CASE("exo finger tool: pressing into a block and releasing is passive", "[c
   // 2 ms period lags 1 ms, and a spring rendered with lag tau on a cycle of frequency w returns at
   // most 2 pi w tau of its peak energy per cycle (0.6 % at w = 2 pi / 4 s); allow twice that.
   CHECK(port.energyOut() <= 0.012 * 2.0 * stored);
+}
+
+// CHAI3D's force rise (cGenericTool::applyToDevice): from engagement the command is scaled by
+// t / rise time, t on CHAI3D's wall clock, until the rise time has passed. The bounds below hold
+// whatever the machine's speed: the rise clock starts after t0 and is read before each frame ends.
+TEST_CASE("exo finger tool: CHAI3D's force rise ramps the joint torque up after engagement",
+          "[chai3d_adapters][exo_tool]") {
+  auto device = cExoFingerDevice::create(exoSelection(false));
+  device->setLockStep(true);
+  FingerScene scene(device);
+  pressProximalPhalanx(scene, device);
+  const uhaptics::Vec2 full = scene.tool->getFingerJointTorque();
+  REQUIRE(full.norm() > 1e-3);
+  // CHAI3D's default (no rise): engaged, the device holds the tool's torque as computed.
+  CHECK(device->getFingerJointTorque() == full);
+  scene.tool->setForcesOFF();
+  CHECK(device->getFingerJointTorque().isZero(0.0));
+
+  SECTION("during the rise, the torque times the elapsed share of the rise time") {
+    const double rise = 1000.0;  // s: far longer than the frames below, so the ramp is under way throughout
+    scene.tool->setUseForceRise(true);
+    scene.tool->setRiseTime(rise);
+    const auto t0 = std::chrono::steady_clock::now();
+    REQUIRE(scene.tool->setForcesON());
+    double previous = 0.0;
+    for (int i = 0; i < 200; ++i) {
+      scene.tick();
+      const double elapsed = secondsSince(t0);
+      const uhaptics::Vec2 tau = scene.tool->getFingerJointTorque();  // the contact, this frame
+      const uhaptics::Vec2 sent = device->getFingerJointTorque();
+      const double scale = sent.dot(tau) / tau.squaredNorm();
+      INFO("frame " << i << ": scale " << scale << " after " << elapsed << " s");
+      CHECK((sent - scale * tau).norm() <= 1e-12 * tau.norm());  // only scaled, never turned
+      CHECK(scale >= previous);                                  // rising
+      // No faster than the ramp; 1 us for CHAI3D's clock (steady_clock too) read as a double of
+      // the time since boot, a few 1e-10 s of rounding.
+      CHECK(scale <= (elapsed + 1e-6) / rise);
+      previous = scale;
+    }
+    CHECK(previous > 0.0);
+    CHECK(previous < 0.01);  // held back: the full torque would be scale 1
+  }
+  SECTION("after the rise time, the full torque") {
+    const double rise = 0.02;  // s
+    scene.tool->setUseForceRise(true);
+    scene.tool->setRiseTime(rise);
+    const auto t0 = std::chrono::steady_clock::now();
+    REQUIRE(scene.tool->setForcesON());
+    scene.tick();
+    CHECK(device->getFingerJointTorque().norm() < scene.tool->getFingerJointTorque().norm());  // rising
+    // Frames until the rise time has surely passed (the outcome does not depend on how long they take).
+    while (secondsSince(t0) < 2.0 * rise) {
+      std::this_thread::sleep_for(std::chrono::milliseconds(1));
+      scene.tick();
+    }
+    scene.tick();
+    CHECK(device->getFingerJointTorque() == scene.tool->getFingerJointTorque());  // scale exactly 1
+  }
+}
+
+// A contact the tool sends as joint torque only (no Cartesian force) is still a proxy contact.
+TEST_CASE("exo finger tool: the device's renderer figures count the tool's contacts", "[chai3d_adapters][exo_tool]") {
+  auto device = cExoFingerDevice::create(exoSelection(true));
+  device->setLockStep(true);
+  FingerScene scene(device);
+  const double r = device->getSpecifications().m_workspaceRadius;
+  scene.addBox(cVector3d(0, 0, -1.2 * r), cIdentity3d(), 4 * r, 4 * r, 2 * r);
+  REQUIRE(scene.tool->start());
+  std::uint64_t torque_frames = 0;
+  for (int i = 0; i < 2000; ++i) {  // one lap: the finger dips into the block
+    scene.tick();
+    torque_frames += device->getFingerJointTorque().isZero(0.0) ? 0 : 1;
+  }
+  const auto stats = device->getSessionStats();
+  REQUIRE(stats.faults == 0);
+  const auto* solves = stats.figure("proxy_solves");
+  const auto* contact_ticks = stats.figure("proxy_contact_ticks");
+  REQUIRE(solves != nullptr);
+  REQUIRE(contact_ticks != nullptr);
+  INFO("frames with a joint torque " << torque_frames << ", solves " << solves->value << ", contact ticks "
+                                     << contact_ticks->value);
+  CHECK(torque_frames > 100);
+  CHECK(solves->value == static_cast<double>(torque_frames));  // one solve per frame with a torque
+  // Most of them above the contact threshold; the few below are the proxy's first and last
+  // hundredths of a millimetre in the block.
+  CHECK(contact_ticks->value <= solves->value);
+  CHECK(contact_ticks->value > 0.5 * solves->value);
 }
 
 TEST_CASE("exo finger tool: a haptic frame allocates nothing", "[chai3d_adapters][exo_tool]") {

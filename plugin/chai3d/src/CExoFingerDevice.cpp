@@ -10,6 +10,9 @@ namespace chai3d {
 namespace {
 
 constexpr int kGrid = 21;  // samples per finger joint when surveying the working range
+// [N] a fingertip pull above this is a contact: the session statistics' contact threshold
+// (uhaptics::SessionStats' default, which cUhapticsDevice uses).
+constexpr double kContactThreshold = 0.05;
 
 }  // namespace
 
@@ -62,6 +65,12 @@ cExoFingerDevice::cExoFingerDevice(unsigned int a_deviceNumber, const uhaptics::
   gains.Zq = Model::ActuatorVector::Constant(m_couplingStiffness * lever_sq).asDiagonal();  // Z_x seen at l_x
   gains.force_limit = model.forceLimit();
   m_renderer = std::make_unique<Renderer>(model, gains);
+
+  using Kind = uhaptics::RendererFigure::Kind;
+  m_figureContactTicks = sessionStats().declareFigure("proxy_contact_ticks", Kind::kCount);
+  m_figureProxyDistance = sessionStats().declareFigure("max_proxy_distance_mm", Kind::kMaximum);
+  m_figureActuatorForce = sessionStats().declareFigure("max_actuator_force_N", Kind::kMaximum);
+  m_figureSolves = sessionStats().declareFigure("proxy_solves", Kind::kCount);
 }
 
 cExoFingerDevice::~cExoFingerDevice() { close(); }
@@ -144,15 +153,34 @@ uhaptics::Fault cExoFingerDevice::servoTick(const ServoInput& a_input, double& a
   uhaptics::update(model, q, m_data);
   // The proxy pull in the finger plane (device y, z) -> hand frame -> finger-joint torque.
   const uhaptics::Vec2 f_hand = deviceToPlanar(a_input.force);
-  Model::TaskVector x_proxy = m_data.x;
-  if (!f_hand.isZero(0.0)) {
-    const uhaptics::Mat2 Jtip =
-        uhaptics::centralDifferenceJacobian([&](const uhaptics::Vec2& y) { return fingertip(y); }, m_data.x);
-    x_proxy += (Jtip.transpose() * f_hand) / m_couplingStiffness;
+  const bool pulled = !f_hand.isZero(0.0);
+  uhaptics::Mat2 Jtip = uhaptics::Mat2::Zero();  // d fingertip / d x, hand frame; only with a command
+  if (pulled || !m_fingerTorqueCommand.isZero(0.0)) {
+    Jtip = uhaptics::centralDifferenceJacobian([&](const uhaptics::Vec2& y) { return fingertip(y); }, m_data.x);
   }
+  Model::TaskVector x_proxy = m_data.x;
+  if (pulled) x_proxy += (Jtip.transpose() * f_hand) / m_couplingStiffness;
   x_proxy += m_fingerTorqueCommand / m_couplingStiffness;  // multi-point tools' joint torque
+  // The renderer solves for the subspace proxy exactly when it has a proxy off the probe to render
+  // and none of its input checks fails (the same checks, on the same model evaluations of q): in
+  // free space (no force, no joint torque) the proxy is the probe and every solve is skipped.
+  const bool solves = !(x_proxy - m_data.x).isZero(0.0) && x_proxy.allFinite() && m_data.q.allFinite() &&
+                      m_data.in_range && m_data.x.allFinite() && m_data.J.allFinite();
   const uhaptics::Fault fault = m_renderer->tick(m_data.q, x_proxy, m_actuator);
   a_outputMagnitude = std::abs(m_actuator(0));
+  if (solves) {
+    sessionStats().count(m_figureSolves);
+    const double distance = (fingertip(x_proxy) - m_data.points.fingertip).norm();  // probe f(q) to proxy
+    sessionStats().observeMaximum(m_figureProxyDistance, 1e3 * distance);
+    // The application's pull as one fingertip force: the joint torque it asks for, Z_x (x_p - x),
+    // through J_tip^-T (the Cartesian force itself when only that channel is used).
+    const uhaptics::Vec2 pull =
+        uhaptics::regularizedSolve(Jtip.transpose(), m_couplingStiffness * (x_proxy - m_data.x));
+    if (fault == uhaptics::Fault::kNone && pull.norm() > kContactThreshold) {
+      sessionStats().count(m_figureContactTicks);
+    }
+  }
+  sessionStats().observeMaximum(m_figureActuatorForce, a_outputMagnitude);
   if (hasBoard()) {
     commandBoard(m_actuator.data());
     updateState(a_input.dt);  // this reading; the command shows in the next
@@ -187,6 +215,11 @@ uhaptics::Vec3 cExoFingerDevice::handToDevice(const uhaptics::Vec2& a_handPoint)
 void cExoFingerDevice::setFingerJointTorque(const uhaptics::Vec2& a_torque) {
   std::lock_guard<std::mutex> lock(deviceMutex());
   m_fingerTorqueCommand = a_torque.allFinite() ? a_torque : uhaptics::Vec2::Zero();
+}
+
+uhaptics::Vec2 cExoFingerDevice::getFingerJointTorque() {
+  std::lock_guard<std::mutex> lock(deviceMutex());
+  return m_fingerTorqueCommand;
 }
 
 uhaptics::Vec2 cExoFingerDevice::getFingerTorque() {

@@ -131,20 +131,61 @@ void cExoFingerTool::computeInteractionForces() {
 
 bool cExoFingerTool::applyToDevice() {
   if (m_exo == nullptr || !m_enabled) return C_ERROR;
-  // CHAI3D's start-up rule (cGenericTool::applyToDevice): with waitForSmallForce, forces engage
-  // once the tool's force stayed below the threshold for more than three frames.
+  // CHAI3D's start-up rules, step for step as cGenericTool::applyToDevice (CHAI3D 3.3) applies them
+  // to a Cartesian force, here to the joint torque, which is this tool's whole command.
+  uhaptics::Vec2 torque = m_jointTorque;
+
+  // Wait for small force: forces engage once the tool's force stayed below the threshold for more
+  // than three frames.
   if (!m_forceEngaged) {
     if (!m_useWaitForSmallForce) {
       m_forceEngaged = true;
     } else if (m_deviceLocalForce.length() < m_smallForceThresh) {
-      if (m_smallForceCounter > 3) m_forceEngaged = true;
-      else ++m_smallForceCounter;
+      if (m_smallForceCounter > 3) {
+        m_forceEngaged = true;
+        m_smallForceCounter = 0;
+      } else {
+        ++m_smallForceCounter;
+      }
     } else {
       m_smallForceCounter = 0;
     }
   }
+
+  // Force rise: from engagement, the command is scaled by t / rise time (wall clock) until the
+  // rise time has passed. As in CHAI3D, without setUseForceRise(true) the rise is switched off on
+  // the first engaged frame, whose scale is that of the unstarted clock (0: one zero frame).
+  if (m_forceEngaged && m_flagForceRiseActivated) {
+    if (m_flagForceRiseFirstTime) {
+      if (m_useForceRise) {
+        m_forceRiseClock.reset();
+        m_forceRiseClock.start();
+        m_flagForceRiseFirstTime = false;
+      } else {
+        m_flagForceRiseActivated = false;
+      }
+    }
+    double scale = 1.0;
+    const double time = cClamp(m_forceRiseClock.getCurrentTimeSeconds(), 0.0, m_forceRiseTime);
+    if (m_forceRiseTime > C_SMALL) {
+      scale = time / m_forceRiseTime;
+      torque *= scale;
+    }
+    // CHAI3D's rising damping, (1 - scale) 0.2 of the device's linear damping on the tool's
+    // velocity when both loops run above 400 Hz, as a fingertip force mapped to the finger joints.
+    // The exoskeleton specifies no damping (a position-driven finger), so it adds nothing there.
+    // (The specification is read in place: getSpecifications() copies its strings, an allocation.)
+    const double kMinFrequency = 400.0;
+    const double damping = (1.0 - scale) * 0.2 * m_exo->m_specifications.m_maxLinearDamping;
+    if (damping > 0.0 && m_freqRead.getFrequency() > kMinFrequency && m_freqWrite.getFrequency() > kMinFrequency) {
+      torque.noalias() -= damping * (jacobian(kFingertip, m_fingerAngles).transpose() * toEigen(m_deviceLocalLinVel));
+    }
+    if (m_forceRiseClock.getCurrentTimeSeconds() >= m_forceRiseTime) m_flagForceRiseActivated = false;
+  }
+
   const bool on = m_forceOn && m_forceEngaged;
-  m_exo->setFingerJointTorque(on ? m_jointTorque : uhaptics::Vec2::Zero());
+  m_exo->setFingerJointTorque(on ? torque : uhaptics::Vec2::Zero());
+  m_freqWrite.signal(1);
   // The Cartesian channel stays zero: the whole command is the joint torque above. This call is
   // what advances the device's servo ticks.
   return m_exo->setForceAndTorqueAndGripperForce(cVector3d(0, 0, 0), cVector3d(0, 0, 0), 0.0);

@@ -14,6 +14,16 @@
 // actuated subspace can display is displayed, so the device stays passive (eq. 9) where projecting
 // F directly (the standard method) is not.
 //
+// Renderer figures (session statistics, "renderer_figures" in the UHAPTICS_STATS file):
+//   proxy_solves           ticks in which the subspace proxy was solved (free space skips it: the
+//                          proxy is then the probe)
+//   proxy_contact_ticks    of those, ticks that rendered a contact: no fault, and the application's
+//                          pull (Cartesian force and multi-point joint torque, as one fingertip
+//                          force) above the statistics' contact threshold, 0.05 N
+//   max_proxy_distance_mm  largest fingertip distance between the probe f(q) and the proxy target
+//                          the solve used, x_p [mm]
+//   max_actuator_force_N   largest |actuator command| sent [N]
+//
 // Simulated backend: the finger is position-driven (paper 000's setting), following flexion-
 // extension cycles whose period is the scripted hand's lap time, or, when the selection names the
 // hand's waypoints (a path chosen for a scene), moving its fingertip along that path as closely as
@@ -56,6 +66,8 @@ class cExoFingerDevice : public cUhapticsDevice {
   /// contacts on several phalanges, added to the one read from the Cartesian force and held until
   /// replaced; rendered through the subspace proxy like that one. Non-finite input counts as zero.
   void setFingerJointTorque(const uhaptics::Vec2& a_torque);
+  /// The joint torque setFingerJointTorque() holds now [N m].
+  uhaptics::Vec2 getFingerJointTorque();
   /// A hand-frame point (ExoFingerPoints, model geometry) in this device's frame [m].
   uhaptics::Vec3 handToDevice(const uhaptics::Vec2& a_handPoint) const noexcept;
 
@@ -79,6 +91,8 @@ class cExoFingerDevice : public cUhapticsDevice {
   uhaptics::Vec2 m_centre = uhaptics::Vec2::Zero();  // fingertip workspace centre, hand frame
   Model::ActuatorVector m_actuator = Model::ActuatorVector::Zero();
   uhaptics::Vec2 m_fingerTorqueCommand = uhaptics::Vec2::Zero();  // setFingerJointTorque()
+  // Renderer figures (session statistics), see the class comment.
+  int m_figureContactTicks = -1, m_figureProxyDistance = -1, m_figureActuatorForce = -1, m_figureSolves = -1;
 };
 
 }  // namespace chai3d

@@ -16,6 +16,14 @@
 // subspace can (eq. 6): a contact on the proximal phalanx gives no PIP torque, one on the middle
 // phalanx loads both joints, and the actuator shows their projection.
 //
+// CHAI3D's start-up rules of cGenericTool apply to tau_x as they apply to a stock tool's force:
+// setWaitForSmallForce() holds it back until the tool's force stayed small, setUseForceRise() /
+// setRiseTime() ramp it up from engagement (and after setForcesON()), setForcesOFF() zeroes it.
+//
+// On a device from CHAI3D's cHapticDeviceHandler (the uhaptics slot), attach the exoskeleton behind
+// it: setExoFingerDevice(std::dynamic_pointer_cast<cExoFingerDevice>(
+//     uhaptics::adapter::uhapticsDevice(hapticDevice)))   (uhaptics/chai3d/device_registry.hpp).
+//
 // The tool frame is the device frame scaled by the workspace scale factor (as for any CHAI3D tool);
 // point forces are mapped back like CHAI3D's cToolCursor does (rotation only, no scaling).
 // Servo use: updateFromDevice(), computeInteractionForces(), applyToDevice() allocate nothing.
