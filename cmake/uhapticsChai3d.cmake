@@ -164,15 +164,16 @@ function(uhaptics_provide_chai3d)
   # Only CHAI3D's library is built; its examples are compiled by uhaptics' drop-in tests.
   # CMAKE_EXPORT_NO_PACKAGE_REGISTRY: CHAI3D's export(PACKAGE) would otherwise register the build
   # in ~/.cmake for every other project on the machine.
+  # The same C++ compiler as uhaptics (one libstdc++ ABI); CHAI3D's C sources take the default C
+  # compiler (uhaptics itself compiles no C).
   execute_process(
     COMMAND "${CMAKE_COMMAND}" -S "${_source}" -B "${_build}" -G "${CMAKE_GENERATOR}"
-            -DCMAKE_BUILD_TYPE=Release
-            -DCMAKE_C_COMPILER=${CMAKE_C_COMPILER} -DCMAKE_CXX_COMPILER=${CMAKE_CXX_COMPILER}
+            -DCMAKE_BUILD_TYPE=Release -DCMAKE_CXX_COMPILER=${CMAKE_CXX_COMPILER}
             -DCMAKE_EXPORT_NO_PACKAGE_REGISTRY=ON
     RESULT_VARIABLE _rc OUTPUT_FILE "${_log}" ERROR_FILE "${_log}.err")
   if(_rc EQUAL 0)
     execute_process(COMMAND "${CMAKE_COMMAND}" --build "${_build}" --target chai3d -j ${_jobs}
-                    RESULT_VARIABLE _rc OUTPUT_FILE "${_log}" ERROR_FILE "${_log}.err")
+                    RESULT_VARIABLE _rc OUTPUT_FILE "${_log}.build" ERROR_FILE "${_log}.err")
   endif()
   if(NOT _rc EQUAL 0)
     file(READ "${_log}.err" _err)
@@ -181,7 +182,7 @@ function(uhaptics_provide_chai3d)
       math(EXPR _from "${_length} - 4000")
       string(SUBSTRING "${_err}" ${_from} 4000 _err)
     endif()
-    _uh_chai3d_fail("building CHAI3D from ${_source} failed (${_rc}); see ${_log} and ${_log}.err:\n${_err}\n"
+    _uh_chai3d_fail("building CHAI3D from ${_source} failed (${_rc}); see ${_log}*:\n${_err}\n"
                     "(CHAI3D needs Debian's libgl1-mesa-dev libglu1-mesa-dev libusb-1.0-0-dev xorg-dev libasound2-dev)")
   endif()
   file(WRITE "${_stamp}" "${_id}")
