@@ -1,6 +1,9 @@
 // cTauDevice on the simulated backend with a stock CHAI3D world and cToolCursor (no graphics).
 #include <catch2/catch.hpp>
 #include <cmath>
+#include <cstdlib>
+#include <utility>
+#include <vector>
 
 #include "chai3d.h"
 #include "tool_scene.hpp"
@@ -135,4 +138,283 @@ TEST_CASE("tau: a servo tick allocates nothing", "[chai3d_adapters][tau]") {
     device->setForce(cVector3d(0.0, 0.0, i % 200 < 100 ? 5.0 : 0.0));  // in and out of contact
   }
   CHECK(scope.count() == 0);
+}
+
+// ---- the LQR wall in unchanged scenes: engagement rule, curved and concave surfaces, friction,
+// ---- chatter, and the renderer figures that report them
+
+namespace {
+
+double figure(const cTauDevicePtr& device, const char* name) {
+  const uhaptics::SessionStatsSnapshot stats = device->getSessionStats();
+  const uhaptics::RendererFigure* f = stats.figure(name);
+  REQUIRE(f != nullptr);
+  return f->value;
+}
+
+bool reporting() { return std::getenv("UHAPTICS_TEST_REPORT") != nullptr; }
+
+// The scripted hand on a closed path (workspace radii): a stiff spring, 8 N at most.
+uhaptics::DeviceSelection handPath(std::vector<uhaptics::Vec3> waypoints, double lap_time) {
+  uhaptics::DeviceSelection s;
+  s.device = "tau";
+  s.hand.waypoints = std::move(waypoints);
+  s.hand.lap_time = lap_time;
+  s.hand.stiffness = 1500.0;
+  s.hand.damping = 20.0;
+  s.hand.max_force = 8.0;
+  return s;
+}
+
+double degrees(double radians) { return radians * 180.0 / M_PI; }
+
+struct Slide {
+  double max_depth = 0.0;         // m, tool below the sphere's surface while the wall owns the contact
+  double worst_normal = 0.0;      // deg, wall's normal vs the sphere's, while the application feels contact
+  double arc_min = 1e9, arc_max = -1e9;  // deg, polar angle of the tool over the sphere while held
+  double engagements = 0.0, overloads = 0.0;
+};
+
+// A rigid sphere of radius 0.6 r (15 mm) whose top is 0.2 r below the workspace centre. The hand
+// comes down left of the top, presses and slides across to the right, lifts and returns through
+// the air: one slide per 4 s lap. shape: cShapeSphere (CHAI3D's potential field: the tool's centre
+// meets the surface) in a world in device units; else a 64 x 64 mesh sphere (the finger proxy: the
+// tool's radius meets it) in a world of radius 1 as CHAI3D's examples map it.
+Slide slideOverSphere(bool shape) {
+  auto device = cTauDevice::create(handPath({uhaptics::Vec3(-0.6, 0, 0.2), uhaptics::Vec3(-0.6, 0, -0.35),
+                                             uhaptics::Vec3(0.6, 0, -0.35), uhaptics::Vec3(0.6, 0, 0.2)},
+                                            4.0));
+  device->setLockStep(true);
+  const double r = device->getSpecifications().m_workspaceRadius;
+  ToolScene scene(device, kToolRadius, shape ? 0.0 : 1.0);
+  const double scale = scene.scale();
+  scene.tool->setRadius(kToolRadius * scale);
+  const double radius = 0.6 * r;
+  const cVector3d centre(0.0, 0.0, -0.8 * r);  // device frame [m]
+  if (shape) {
+    auto* sphere = new cShapeSphere(radius * scale);
+    scene.world.addChild(sphere);
+    sphere->setLocalPos(centre * scale);
+    sphere->createEffectSurface();
+    sphere->m_material->setStiffness(6000.0 / scale);
+  } else {
+    auto* sphere = new cMesh();
+    scene.world.addChild(sphere);
+    cCreateSphere(sphere, radius * scale, 64, 64);
+    sphere->setLocalPos(centre * scale);
+    sphere->createAABBCollisionDetector(kToolRadius * scale);
+    sphere->m_material->setStiffness(6000.0 / scale);
+  }
+  const double surface = radius + (shape ? 0.0 : kToolRadius);  // where the tool's centre meets it
+  REQUIRE(scene.tool->start());
+  Slide result;
+  for (int i = 0; i < 4000; ++i) {
+    scene.tick();
+    REQUIRE(device->getLastFault() == uhaptics::Fault::kNone);
+    if (!device->isLqrWallEngaged()) continue;
+    cVector3d position, point, normal;
+    device->getPosition(position);
+    const cVector3d radial = position - centre;
+    result.max_depth = std::max(result.max_depth, surface - radial.length());
+    if (device->getLqrPenetration() > 0.0) {
+      const double arc = degrees(std::atan2(radial.x(), radial.z()));
+      result.arc_min = std::min(result.arc_min, arc);
+      result.arc_max = std::max(result.arc_max, arc);
+    }
+    if (scene.tool->getDeviceGlobalForce().length() > 0.05 && device->getContactSurface(point, normal))
+      result.worst_normal = std::max(result.worst_normal, degrees(std::acos(cClamp(normal.dot(cNormalize(radial)), -1.0, 1.0))));
+  }
+  result.engagements = figure(device, "lqr_engagements");
+  result.overloads = figure(device, "lqr_overloads");
+  return result;
+}
+
+}  // namespace
+
+TEST_CASE("tau: the LQR wall follows a rigid sphere the tool slides over", "[chai3d_adapters][tau]") {
+  for (const bool shape : {true, false}) {
+    const Slide slide = slideOverSphere(shape);
+    INFO((shape ? "cShapeSphere" : "mesh sphere") << ": depth " << slide.max_depth * 1e3 << " mm, normal off by "
+                                                   << slide.worst_normal << " deg, held over " << slide.arc_min
+                                                   << ".." << slide.arc_max << " deg");
+    if (reporting()) WARN((shape ? "cShapeSphere" : "mesh sphere") << ": depth " << slide.max_depth * 1e3
+                          << " mm, normal off by " << slide.worst_normal << " deg, held over " << slide.arc_min << ".."
+                          << slide.arc_max << " deg, engagements " << slide.engagements);
+    CHECK(slide.engagements == 1.0);  // one slide, one contact
+    CHECK(slide.overloads == 0.0);
+    // Held while the tool slid through more than 30 deg of the sphere (a plane latched at the first
+    // touch would leave the sphere's surface by R (1 - cos 30 deg) = 2 mm over that arc).
+    CHECK(slide.arc_max - slide.arc_min > 30.0);
+    CHECK(slide.max_depth < 1e-3);  // paper 001's bound
+    // The plane turns with the surface: within 10 deg of the sphere's normal (its filters lag by
+    // about a degree at this speed; the rest is the tool bouncing off the wall, during which the
+    // plane waits; measured 4-8 deg).
+    CHECK(slide.worst_normal < 10.0);
+  }
+}
+
+namespace {
+
+// A groove along y: two rigid faces at +-45 deg meeting 0.2 r below the workspace centre (a mesh,
+// the finger proxy; world in device units). The hand of the 12 N block push presses the tool into
+// the crease twice. Depth: the most the tool's sphere overlaps either face.
+struct Groove {
+  double max_depth = 0.0;  // m
+  bool engaged = false;
+  double overloads = 0.0;
+};
+Groove pushIntoGroove(cTauDevice::cWallMode mode) {
+  auto device = cTauDevice::create(tauSelection(mode));
+  device->setLockStep(true);
+  const double r = device->getSpecifications().m_workspaceRadius;
+  ToolScene scene(device, kToolRadius);
+  auto* groove = new cMesh();
+  scene.world.addChild(groove);
+  const double crease = -0.2 * r;
+  const double a = r;  // half width
+  groove->newTriangle(cVector3d(-a, -2 * a, crease + a), cVector3d(0, -2 * a, crease), cVector3d(0, 2 * a, crease));
+  groove->newTriangle(cVector3d(-a, -2 * a, crease + a), cVector3d(0, 2 * a, crease), cVector3d(-a, 2 * a, crease + a));
+  groove->newTriangle(cVector3d(0, -2 * a, crease), cVector3d(a, -2 * a, crease + a), cVector3d(a, 2 * a, crease + a));
+  groove->newTriangle(cVector3d(0, -2 * a, crease), cVector3d(a, 2 * a, crease + a), cVector3d(0, 2 * a, crease));
+  groove->computeAllNormals();
+  groove->createAABBCollisionDetector(kToolRadius);
+  groove->m_material->setStiffness(6000.0);
+  const cVector3d left = cNormalize(cVector3d(1, 0, 1)), right = cNormalize(cVector3d(-1, 0, 1));
+  const cVector3d bottom(0, 0, crease);
+  REQUIRE(scene.tool->start());
+  Groove result;
+  for (int i = 0; i < 4000; ++i) {
+    scene.tick();
+    REQUIRE(device->getLastFault() == uhaptics::Fault::kNone);
+    const cVector3d p = scene.tool->getDeviceGlobalPos() - bottom;
+    result.max_depth = std::max(result.max_depth, kToolRadius - std::max(p.dot(left), p.dot(right)));
+    result.engaged = result.engaged || device->isLqrWallEngaged();
+  }
+  result.overloads = figure(device, "lqr_overloads");
+  return result;
+}
+
+}  // namespace
+
+TEST_CASE("tau: a concave groove pushed into is held on both faces", "[chai3d_adapters][tau]") {
+  const Groove lqr = pushIntoGroove(cTauDevice::C_TAU_WALL_AUTO);
+  const Groove spring = pushIntoGroove(cTauDevice::C_TAU_WALL_SPRING);
+  if (reporting()) WARN("12 N into a 90 deg groove: depth LQR " << lqr.max_depth * 1e3 << " mm, spring " << spring.max_depth * 1e3 << " mm");
+  CHECK(lqr.engaged);
+  CHECK(lqr.overloads == 0.0);
+  // One plane through the crease normal to the faces' combined force holds the push; the faces'
+  // forces across it are the application's spring, so the tool stays in the crease.
+  CHECK(lqr.max_depth < 1e-3);  // paper 001's bound
+  CHECK_FALSE(spring.engaged);
+  CHECK(spring.max_depth > 2.0 * lqr.max_depth);
+}
+
+TEST_CASE("tau: friction does not tilt the wall's normal", "[chai3d_adapters][tau]") {
+  // A rigid block with Coulomb friction (static 0.5, dynamic 0.4: a slipping finger proxy tilts its
+  // force 22 deg off the normal, a stuck one up to 27 deg). The hand comes straight down, presses
+  // with up to 8 N, slides 25 mm across, lifts and returns through the air.
+  auto device = cTauDevice::create(handPath({uhaptics::Vec3(-0.5, 0, 0.0), uhaptics::Vec3(-0.5, 0, -0.5),
+                                             uhaptics::Vec3(0.5, 0, -0.5), uhaptics::Vec3(0.5, 0, 0.0)},
+                                            4.0));
+  device->setLockStep(true);
+  ToolScene scene(device, kToolRadius);
+  cMesh* block = scene.addBlock(0.2, 6000.0);
+  block->m_material->setStaticFriction(0.5);
+  block->m_material->setDynamicFriction(0.4);
+  block->m_material->setUseHapticFriction(true);
+  REQUIRE(scene.tool->start());
+  double worst_normal = 0.0, worst_force = 0.0, x_min = 1e9, x_max = -1e9;
+  for (int i = 0; i < 4000; ++i) {
+    scene.tick();
+    REQUIRE(device->getLastFault() == uhaptics::Fault::kNone);
+    const cVector3d force = scene.tool->getDeviceGlobalForce();
+    cVector3d point, normal;
+    if (!device->isLqrWallEngaged() || force.z() < 0.05 || !device->getContactSurface(point, normal)) continue;
+    worst_normal = std::max(worst_normal, degrees(std::acos(cClamp(normal.z(), -1.0, 1.0))));
+    worst_force = std::max(worst_force, degrees(std::acos(cClamp(force.z() / force.length(), -1.0, 1.0))));
+    x_min = std::min(x_min, point.x());
+    x_max = std::max(x_max, point.x());
+  }
+  if (reporting()) WARN("friction: wall's normal off by " << worst_normal << " deg, the application's force by up to "
+                        << worst_force << " deg, over " << (x_max - x_min) * 1e3 << " mm of sliding");
+  CHECK(figure(device, "lqr_engagements") == 1.0);
+  CHECK(x_max - x_min > 20e-3);           // it slid
+  CHECK(worst_force > degrees(std::atan(0.4)));  // and friction tilted the application's force
+  // The wall's normal: within 8 deg of the face's, a third of the sliding friction's 22 deg (the
+  // force's tilt along the proxy's path is removed; what is left is the slow average of the proxy's
+  // jitter across the path; measured 4.3 deg, and 27 deg with the force used as it comes).
+  CHECK(worst_normal < 8.0);
+}
+
+TEST_CASE("tau: a steady push is one engagement, held throughout, within the torque limits",
+          "[chai3d_adapters][tau]") {
+  // The block push's hand, but its anchor keeps going down for 4 s: one steady 12 N push.
+  auto selection = tauSelection(cTauDevice::C_TAU_WALL_AUTO);
+  selection.hand.lap_time = 8.0;
+  auto device = cTauDevice::create(selection);
+  device->setLockStep(true);
+  ToolScene scene(device, kToolRadius);
+  scene.addBlock(0.2, 6000.0);
+  REQUIRE(scene.tool->start());
+  int engaged_ticks = 0, flips = 0;
+  bool was = false;
+  for (int i = 0; i < 4000; ++i) {
+    scene.tick();
+    REQUIRE(device->getLastFault() == uhaptics::Fault::kNone);
+    const bool engaged = device->isLqrWallEngaged();
+    flips += engaged != was;
+    was = engaged;
+    engaged_ticks += engaged;
+  }
+  const double held = figure(device, "lqr_held_ticks");
+  if (reporting()) WARN("steady push: engaged " << engaged_ticks << " ticks, held " << held << ", saturated "
+                        << figure(device, "lqr_saturated_ticks") << ", deepest " << figure(device, "max_penetration_mm") << " mm");
+  CHECK(flips == 1);  // engaged once, never released
+  CHECK(figure(device, "lqr_engagements") == 1.0);
+  CHECK(figure(device, "lqr_releases") == 0.0);
+  CHECK(engaged_ticks > 1500);  // from the first touch (about 2 s in) to the end
+  // Held most of it: the rest are ticks where the tool, pushed back onto the plane, is just above it.
+  CHECK(held > 0.8 * engaged_ticks);
+  CHECK(figure(device, "max_penetration_mm") < 1.0);
+  CHECK(figure(device, "lqr_saturated_ticks") == 0.0);  // at the centre the wall stays within the limits
+}
+
+TEST_CASE("tau: a surface below the stiffness threshold stays with the spring and is reported soft",
+          "[chai3d_adapters][tau]") {
+  // 04-shapes' spheres: 0.4 of the device's maxLinearStiffness, 2400 N/m at the device.
+  auto device = cTauDevice::create(tauSelection(cTauDevice::C_TAU_WALL_AUTO));
+  device->setLockStep(true);
+  ToolScene scene(device, kToolRadius, 1.0);  // as 04-shapes maps it: workspace radius 1
+  scene.tool->setRadius(kToolRadius * scene.scale());
+  scene.addBlock(0.2, 0.4 * device->getSpecifications().m_maxLinearStiffness);
+  REQUIRE(scene.tool->start());
+  for (int i = 0; i < 4000; ++i) {
+    scene.tick();
+    REQUIRE_FALSE(device->isLqrWallEngaged());
+  }
+  const double measured = figure(device, "soft_stiffness_max_N_per_m");
+  if (reporting()) WARN("2400 N/m surface: measured " << measured << " N/m, soft contacts " << figure(device, "soft_surface_contacts"));
+  CHECK(figure(device, "lqr_engagements") == 0.0);
+  CHECK(figure(device, "soft_surface_contacts") == 2.0);  // two pushes
+  CHECK(figure(device, "spring_contact_ticks") > 1000.0);
+  // The probe measures the application's 2400 N/m (the tool's spring is in series with nothing
+  // else; 10 %: the depth is summed over 0.2 mm in 1 ms steps).
+  CHECK(measured == Approx(2400.0).epsilon(0.1));
+}
+
+TEST_CASE("tau: the renderer figures are declared by name", "[chai3d_adapters][tau]") {
+  auto device = cTauDevice::create(tauSelection(cTauDevice::C_TAU_WALL_AUTO));
+  const uhaptics::SessionStatsSnapshot stats = device->getSessionStats();
+  using Kind = uhaptics::RendererFigure::Kind;
+  for (const char* name : {"lqr_engagements", "lqr_held_ticks", "spring_contact_ticks", "soft_surface_contacts",
+                           "lqr_releases", "lqr_saturated_ticks", "lqr_overloads"}) {
+    INFO(name);
+    REQUIRE(stats.figure(name) != nullptr);
+    CHECK(stats.figure(name)->kind == Kind::kCount);
+  }
+  for (const char* name : {"max_penetration_mm", "soft_stiffness_max_N_per_m"}) {
+    INFO(name);
+    REQUIRE(stats.figure(name) != nullptr);
+    CHECK(stats.figure(name)->kind == Kind::kMaximum);
+  }
 }

@@ -11,6 +11,39 @@ namespace {
 // Depth the tool must travel into a contact before its stiffness is estimated: four encoder counts
 // at the tool (about 0.05 mm each), so quantization does not fake a stiff surface.
 constexpr double kProbeDepth = 2e-4;  // m
+// Below this force the application's force says nothing about its surface: the session
+// statistics' contact threshold, 8 um of depth at 6000 N/m.
+constexpr double kTrackForce = 0.05;  // N
+// The application force the wall keeps: its plane lies kHoldForce / k under the proxy, so a held
+// tool stays inside the application's surface and its force keeps saying where that surface is
+// (held on the proxy's own surface, the LQR's integral action would bring that force to zero, and
+// the plane could no longer follow). 0.1 mm at 4800 N/m, a tenth of the paper's 1 mm bound; above
+// contact_force, so the application's own contact does not flicker; and above the jitter of CHAI3D's
+// proxy (its epsilon, 1e-4 world units: 0.6 N at 6000 N/m in a world in device units).
+constexpr double kHoldForce = 0.5;  // N
+// The normal turns toward the application's force (friction removed) with these gains per new
+// force. Along the proxy's path (a surface curving under a sliding proxy): kPathGain, 20 ms, which
+// lags a tool sliding at 15 mm/s over a 15 mm radius by 1 deg. Otherwise: kSlowGain, 200 ms, so a
+// tool rocking across a concave edge does not swing the wall with it (the faces' forces across the
+// wall's normal are rendered by the spring meanwhile) and the proxy's jitter averages out. While
+// probing, before the wall holds anything: kProbeGain, 10 ms.
+constexpr double kPathGain = 0.05;
+constexpr double kSlowGain = 0.005;
+constexpr double kProbeGain = 0.1;
+// The proxy's path: the chord over this length of it (long against the proxy's jitter, short
+// against curvature: the chord of a 15 mm radius is 1 deg off its tangent).
+constexpr double kChord = 5e-4;  // m
+// The plane's offset along its normal follows the proxy with this gain per new force (5 ms), and
+// at most 50 mm/s (twice a brisk hand): a proxy jumping across a mesh's thin feature gives the LQR a
+// ramp, not a step.
+constexpr double kOffsetGain = 0.2;
+constexpr double kPlaneStep = 5e-5;  // m per tick
+// While the wall holds the tool and the application feels no contact, the plane sinks this fast
+// until it does (past a convex crest the real surface falls away below the plane).
+constexpr double kCreepSpeed = 0.01;  // m/s
+// The wall's command saturated this long without a break: the device cannot hold the contact
+// there; the spring (scaled into the torque limits) takes the contact over.
+constexpr int kOverloadTicks = 20;
 
 }  // namespace
 
@@ -19,6 +52,7 @@ cTauDevice::cTauDevice(unsigned int a_deviceNumber, const uhaptics::DeviceSelect
       m_model(std::make_unique<uhaptics::TauModel>(uhaptics::TauModel::load(paramsDirectory() + "/tau.json"))),
       m_stiffThreshold(a_selection.option("stiff_threshold", 3000.0, 1.0, 1e6)),
       m_contactForce(a_selection.option("contact_force", 0.3, 0.01, 10.0)),
+      m_releaseTicks(static_cast<int>(std::lround(a_selection.option("release_time", 0.05, 0.001, 1.0) / getServoPeriod()))),
       m_toolDamping(a_selection.option("tool_damping", 0.0, 0.0, 50.0)) {
   const uhaptics::TauModel& model = *m_model;
   if (std::abs(model.servoPeriod() - getServoPeriod()) > 1e-12) {
@@ -28,7 +62,9 @@ cTauDevice::cTauDevice(unsigned int a_deviceNumber, const uhaptics::DeviceSelect
   m_centre = model.homePose().head<3>();
   m_data = std::make_unique<uhaptics::TauData>(model);
   // LQR gains at the workspace centre (paper 001 linearizes at one operating point).
-  m_lqr = std::make_unique<uhaptics::LqrWallRenderer>(model, uhaptics::designLqrWall(model, model.homePose()));
+  uhaptics::LqrWallRenderer::Options wallOptions;
+  wallOptions.keep_direction = true;
+  m_lqr = std::make_unique<uhaptics::LqrWallRenderer>(model, uhaptics::designLqrWall(model, model.homePose()), wallOptions);
 
   // Force the device can produce in any direction at home: tau = J^T [F; 0] within the torque
   // limits, minimized over a sphere of directions; likewise the torque.
@@ -57,6 +93,18 @@ cTauDevice::cTauDevice(unsigned int a_deviceNumber, const uhaptics::DeviceSelect
   m_specifications.m_maxAngularDamping = 0.01;     // assumed
   m_specifications.m_workspaceRadius = model.workspaceHalfSide();  // the 50 mm cube's inscribed sphere
   updateState();  // at home until opened
+
+  using Kind = uhaptics::RendererFigure::Kind;
+  uhaptics::SessionStats& stats = sessionStats();
+  m_figEngagements = stats.declareFigure("lqr_engagements", Kind::kCount);
+  m_figReleases = stats.declareFigure("lqr_releases", Kind::kCount);
+  m_figHeldTicks = stats.declareFigure("lqr_held_ticks", Kind::kCount);
+  m_figMaxPenetration = stats.declareFigure("max_penetration_mm", Kind::kMaximum);
+  m_figSaturatedTicks = stats.declareFigure("lqr_saturated_ticks", Kind::kCount);
+  m_figSpringTicks = stats.declareFigure("spring_contact_ticks", Kind::kCount);
+  m_figSoftContacts = stats.declareFigure("soft_surface_contacts", Kind::kCount);
+  m_figSoftStiffness = stats.declareFigure("soft_stiffness_max_N_per_m", Kind::kMaximum);
+  m_figOverloads = stats.declareFigure("lqr_overloads", Kind::kCount);
 }
 
 cTauDevice::~cTauDevice() { close(); }
@@ -72,6 +120,20 @@ bool cTauDevice::isLqrWallEngaged() { return m_lqrEngaged.load(); }
 double cTauDevice::getLqrPenetration() {
   std::lock_guard<std::mutex> lock(deviceMutex());
   return m_lqr->command().penetration;
+}
+
+double cTauDevice::getContactStiffness() {
+  std::lock_guard<std::mutex> lock(deviceMutex());
+  return m_stiffness;
+}
+
+bool cTauDevice::getContactSurface(cVector3d& a_point, cVector3d& a_normal) {
+  std::lock_guard<std::mutex> lock(deviceMutex());
+  if (!m_surface.active) return false;
+  const uhaptics::Vec3 point = m_surface.point - m_centre;  // model frame -> device frame
+  a_point.set(point.x(), point.y(), point.z());
+  a_normal.set(m_surface.normal.x(), m_surface.normal.y(), m_surface.normal.z());
+  return true;
 }
 
 void cTauDevice::setContactSurface(bool a_active, const cVector3d& a_point, const cVector3d& a_normal) {
@@ -91,7 +153,9 @@ void cTauDevice::clearContactSurface() {
   std::lock_guard<std::mutex> lock(deviceMutex());
   m_explicitSurface = false;
   m_explicit.active = false;
+  if (m_contact == Contact::kLqr) sessionStats().count(m_figReleases);
   m_contact = Contact::kFree;
+  m_held = false;
   m_surface.active = false;
 }
 
@@ -99,6 +163,10 @@ void cTauDevice::startBackend() {
   m_lqr->reset();
   m_data->pose = m_model->homePose();  // forward kinematics' first guess
   m_contact = Contact::kFree;
+  m_held = false;
+  m_surface.active = false;
+  m_lastForce.setZero();
+  m_stiffness = 0.0;
   m_lqrEngaged = false;
   m_tau.setZero();
   m_qd.setZero();
@@ -127,61 +195,152 @@ void cTauDevice::startBackend() {
 void cTauDevice::stopBackend() noexcept {
   m_tau.setZero();
   m_lqrEngaged = false;
+  m_held = false;
+  m_contact = Contact::kFree;
+  m_surface.active = false;
   m_explicit.active = false;
 }
 
-void cTauDevice::updateContact(const uhaptics::Vec3& a_force) noexcept {
+void cTauDevice::release() noexcept {
+  if (m_contact == Contact::kLqr) sessionStats().count(m_figReleases);
+  m_contact = Contact::kFree;
+  m_surface.active = false;
+}
+
+void cTauDevice::trackSurface(const uhaptics::Vec3& a_force, const uhaptics::Vec3& a_position, double a_stiffness,
+                              double a_turnGain) noexcept {
+  // A force below kTrackForce, or one pointing into the surface (proxy jitter), is no evidence.
   const double magnitude = a_force.norm();
-  const uhaptics::Vec3 tool = m_data->pose.head<3>();
-  const int mode = m_wallMode.load();
-  switch (m_contact) {
-    case Contact::kFree:
-      if (magnitude > m_contactForce && mode != C_TAU_WALL_SPRING) {
-        m_contact = Contact::kProbing;
-        m_onsetPosition = tool;
-        m_onsetForce = magnitude;
-      }
-      break;
-    case Contact::kProbing: {
-      if (magnitude < 0.5 * m_contactForce || mode == C_TAU_WALL_SPRING) {
-        m_contact = Contact::kFree;
-        break;
-      }
-      const uhaptics::Vec3 normal = a_force / magnitude;
-      const double depth = normal.dot(m_onsetPosition - tool);  // travelled into the surface since onset
-      const bool forced = mode == C_TAU_WALL_LQR;
-      if (!forced && depth < kProbeDepth) break;
-      const double stiffness = forced ? m_specifications.m_maxLinearStiffness : (magnitude - m_onsetForce) / depth;
-      if (!forced && stiffness < m_stiffThreshold) break;  // a soft object: the spring renders it
-      // Latch the surface: through the proxy, which sits F / k above the tool along F.
-      m_surface.active = true;
-      m_surface.normal = normal;
-      m_surface.point = tool + a_force / stiffness;
-      m_contact = Contact::kLqr;
+  if (!(magnitude >= kTrackForce) || !(a_force.dot(m_normal) > 0.0)) {
+    m_hasProxy = false;
+    return;
+  }
+  // The application's proxy: its force is F = k (proxy - tool).
+  m_proxy = a_position + a_force / a_stiffness;
+  m_hasProxy = true;
+  m_trailHead = (m_trailHead + 1) % kTrailLength;
+  m_trail[m_trailHead] = m_proxy;
+  m_trailCount = std::min(m_trailCount + 1, kTrailLength);
+  // The proxy's path: the chord back to where it was kChord ago, if that is in the trail (a proxy
+  // that moved less is stuck by static friction, or stopped in a concave edge).
+  uhaptics::Vec3 path = uhaptics::Vec3::Zero();
+  for (int i = 1; i < m_trailCount; ++i) {
+    const uhaptics::Vec3 travel = m_proxy - m_trail[(m_trailHead + kTrailLength - i) % kTrailLength];
+    const double length = travel.norm();
+    if (length >= kChord) {
+      path = travel / length;
       break;
     }
-    case Contact::kLqr:
-      // The surface stays latched while the application still feels it: a stiff wall holds the tool
-      // right at the surface, where the wall's own contact test flickers, and dropping the surface
-      // there would re-probe and latch a deeper one. It is dropped once the tool is off the surface
-      // (the wall not holding it) and the proxy's force is gone.
-      if (!m_lqrEngaged.load() && magnitude < 0.5 * m_contactForce) {
-        m_contact = Contact::kFree;
-        m_surface.active = false;
+  }
+  // Friction: CHAI3D's finger proxy, slipping, sits on its friction cone's rim on the way to the
+  // tool, so its tangential force points against its own motion, which lies in the surface (normal
+  // to it). F's component along the path is that friction and is removed; what is left is normal to
+  // the path, as the surface normal is. A stuck proxy's F is tilted by at most atan(mu_s), and only
+  // the slow gain turns the normal toward it.
+  const uhaptics::Vec3 normalForce = a_force - a_force.dot(path) * path;
+  const double length = normalForce.norm();
+  if (!(length > 0.0)) return;
+  const uhaptics::Vec3 turn = normalForce / length - m_normal;
+  const uhaptics::Vec3 alongPath = turn.dot(path) * path;  // = -(n . path) path: geometry, not F
+  const double weight = std::min(1.0, length / kHoldForce);  // a small force counts in proportion
+  const uhaptics::Vec3 normal = m_normal + kPathGain * alongPath + weight * a_turnGain * (turn - alongPath);
+  const double norm = normal.norm();
+  if (norm > 1e-9 && std::isfinite(norm)) m_normal = normal / norm;
+}
+
+void cTauDevice::startContact(const uhaptics::Vec3& a_force, int a_mode) noexcept {
+  m_contact = a_mode == C_TAU_WALL_SPRING ? Contact::kSpring : Contact::kProbing;
+  m_normal = a_force.normalized();
+  m_hasProxy = false;
+  m_trailCount = 0;
+  m_probeForce = 0.0;
+  m_probeDepth = 0.0;
+  m_quietTicks = 0;
+}
+
+void cTauDevice::updateContact(const uhaptics::Vec3& a_force, const uhaptics::Vec3& a_position) noexcept {
+  const double magnitude = a_force.norm();
+  const int mode = m_wallMode.load();
+  // A force the application has not sent before was computed from the position it read last (the
+  // one reported after the previous tick); a repeated one is older and says nothing new.
+  const bool fresh = (a_force.array() != m_lastForce.array()).any();
+
+  if (m_contact == Contact::kFree) {
+    if (magnitude > m_contactForce && std::isfinite(magnitude)) startContact(a_force, mode);
+  } else {
+    if (mode == C_TAU_WALL_SPRING && m_contact != Contact::kSpring) {
+      release();  // switched to the spring mid-contact
+      m_contact = Contact::kSpring;
+    }
+    // Out of contact: the wall does not hold the tool and the application feels (almost) nothing;
+    // or the wall holds it where the application feels nothing at all (a plane above its surface).
+    const bool out = m_held ? magnitude < kTrackForce : magnitude < 0.5 * m_contactForce;
+    m_quietTicks = out ? m_quietTicks + 1 : 0;
+    if (m_quietTicks >= m_releaseTicks) {
+      release();
+    } else if (m_contact == Contact::kLqr && m_overloadTicks >= kOverloadTicks) {
+      release();
+      m_contact = Contact::kSpring;
+      sessionStats().count(m_figOverloads);
+    } else if (m_contact == Contact::kProbing && fresh) {
+      // Stiffness along the normal: force rise over depth, summed over new forces (a tool sliding
+      // over a curved surface at constant depth adds nothing to either, where a secant from the
+      // onset would count the surface's curvature as depth). The proxy is placed with the device's
+      // nominal stiffness until the probe has measured the scene's.
+      trackSurface(a_force, a_position, m_specifications.m_maxLinearStiffness, kProbeGain);
+      m_probeForce += m_normal.dot(a_force - m_lastForce);
+      m_probeDepth += m_normal.dot(m_lastPosition - a_position);
+      if (m_probeDepth >= kProbeDepth) {
+        const double k = m_probeForce / m_probeDepth;
+        m_stiffness = std::isfinite(k) ? std::max(0.0, k) : 0.0;
+        if (m_stiffness > 0.0 && (m_stiffness >= m_stiffThreshold || mode == C_TAU_WALL_LQR)) {
+          m_contact = Contact::kLqr;
+          m_overloadTicks = 0;
+          m_surface.active = true;
+          m_surface.normal = m_normal;
+          m_surface.point = a_position + (a_force - kHoldForce * m_normal) / m_stiffness;
+          sessionStats().count(m_figEngagements);
+        } else {
+          m_contact = Contact::kSpring;  // a soft surface: the spring renders the whole contact
+          sessionStats().count(m_figSoftContacts);
+          sessionStats().observeMaximum(m_figSoftStiffness, m_stiffness);
+        }
       }
-      break;
+    } else if (m_contact == Contact::kLqr) {
+      // The plane: kHoldForce / k under the proxy, normal to the tracked normal; held without any
+      // force from the application, it sinks.
+      uhaptics::Vec3 step = uhaptics::Vec3::Zero();
+      double gain = 1.0;
+      if (fresh) trackSurface(a_force, a_position, m_stiffness, kSlowGain);
+      if (fresh && m_hasProxy) {
+        step = m_proxy - (kHoldForce / m_stiffness) * m_normal - m_surface.point;
+        gain = kOffsetGain;
+      } else if (m_held && magnitude < kTrackForce) {
+        step = -kCreepSpeed * getServoPeriod() * m_normal;
+      }
+      const double along = m_normal.dot(step);
+      step += (std::min(kPlaneStep, std::max(-kPlaneStep, gain * along)) - along) * m_normal;
+      m_surface.point += step;
+      m_surface.normal = m_normal;
+    }
+  }
+  if (fresh) {
+    m_lastForce = a_force;
+    m_lastPosition = a_position;
   }
 }
 
 uhaptics::Fault cTauDevice::servoTick(const ServoInput& a_input, double& a_outputMagnitude) noexcept {
   // a_input.dt is the model's servo period (checked equal at construction).
   const uhaptics::TauModel& model = *m_model;
+  const uhaptics::Vec3 reported = m_state.position + m_centre;  // model frame
   a_outputMagnitude = 0.0;
   if (hasBoard()) {
     std::uint32_t sample_us = 0;
     if (!readBoard(m_q.data(), sample_us)) {  // zero commanded: link down or host watchdog
       m_tau.setZero();
       m_lqrEngaged = false;
+      m_held = false;
       return uhaptics::Fault::kDeviceError;
     }
     m_rate.update(m_q.data(), 6, sample_us, m_qd.data());
@@ -191,10 +350,14 @@ uhaptics::Fault cTauDevice::servoTick(const ServoInput& a_input, double& a_outpu
   uhaptics::Fault fault = model.forward(m_q, *m_data);
   if (fault == uhaptics::Fault::kNone) {
     if (m_explicitSurface) {
+      const bool was = m_contact == Contact::kLqr;
       m_surface = m_explicit;
       m_contact = m_surface.active ? Contact::kLqr : Contact::kFree;
+      if (m_surface.active && !was) sessionStats().count(m_figEngagements);
+      if (!m_surface.active && was) sessionStats().count(m_figReleases);
     } else {
-      updateContact(a_input.force);
+      // The application computed its force from the position reported after the previous tick.
+      updateContact(a_input.force, reported);
       if (m_contact != Contact::kLqr) m_surface.active = false;
     }
     // The wall renderer runs every tick: its observer must be settled when a contact begins, and
@@ -204,16 +367,32 @@ uhaptics::Fault cTauDevice::servoTick(const ServoInput& a_input, double& a_outpu
     const uhaptics::WallCommand& wall = m_lqr->tick(m_q, m_surface, &m_data->pose, &m_tau);
     fault = wall.fault;
     m_tau = wall.torque;
-    m_lqrEngaged = m_contact == Contact::kLqr && wall.in_contact;
-    if (!m_lqrEngaged.load()) {
+    m_held = m_contact == Contact::kLqr && wall.in_contact;
+    m_lqrEngaged = m_explicitSurface ? m_held : m_contact == Contact::kLqr;
+    m_overloadTicks = m_held && wall.saturated ? m_overloadTicks + 1 : 0;
+    if (m_held) {
+      uhaptics::SessionStats& stats = sessionStats();
+      stats.count(m_figHeldTicks);
+      stats.observeMaximum(m_figMaxPenetration, wall.penetration * 1e3);
+      if (wall.saturated) stats.count(m_figSaturatedTicks);
+      if (!m_explicitSurface) {
+        // The application's force across the wall's normal (a second face of a concave edge or
+        // corner, friction, a mesh's facets): rendered as sent, by the spring.
+        const uhaptics::Vec3 across = a_input.force - m_surface.normal.dot(a_input.force) * m_surface.normal;
+        m_tau.noalias() += m_data->J.topRows<3>().transpose() * across;
+        uhaptics::clampSymmetric(m_tau, model.torqueLimit());
+      }
+    } else {
       uhaptics::Vec6 wrench;
       wrench << a_input.force, a_input.torque;
       m_tau.noalias() += m_data->J.transpose() * wrench;  // the application's spring (the baseline)
       uhaptics::scaleIntoBox(m_tau, model.torqueLimit());
+      if (a_input.force.norm() >= 0.5 * m_contactForce) sessionStats().count(m_figSpringTicks);
     }
   }
   if (fault != uhaptics::Fault::kNone || !m_tau.allFinite()) {
     m_tau.setZero();
+    m_held = false;
     if (fault == uhaptics::Fault::kNone) fault = uhaptics::Fault::kNonFiniteResult;
   }
   uhaptics::Fault backend_fault = uhaptics::Fault::kNone;

@@ -299,9 +299,22 @@ const WallCommand& LqrWallRenderer::tick(const Vec6& q, const SurfaceContact& co
       return cmd_;
     }
   }
-  cmd_.torque += contact_torque;
-  // Per-joint saturation (what the motors do): the unsaturated joints keep holding at full gain.
-  cmd_.saturated = clampSymmetric(cmd_.torque, front_.model().torqueLimit()) > 0;
+  const Vec6& limit = front_.model().torqueLimit();
+  if (options_.keep_direction) {
+    // The largest share s <= 1 of the contact torque with |gravity_i + s contact_i| <= limit_i.
+    double share = 1.0;
+    for (int i = 0; i < 6; ++i) {
+      const double room = contact_torque(i) > 0.0 ? limit(i) - cmd_.torque(i) : limit(i) + cmd_.torque(i);
+      if (std::abs(contact_torque(i)) > room) share = std::min(share, std::max(0.0, room) / std::abs(contact_torque(i)));
+    }
+    cmd_.torque += share * contact_torque;
+    cmd_.saturated = share < 1.0;
+    clampSymmetric(cmd_.torque, limit);  // gravity compensation alone beyond a limit (not at rest)
+  } else {
+    cmd_.torque += contact_torque;
+    // Per-joint saturation (what the motors do): the unsaturated joints keep holding at full gain.
+    cmd_.saturated = clampSymmetric(cmd_.torque, limit) > 0;
+  }
   // Anti-windup by conditional integration: the integrator holds while the actuators saturate.
   if (!cmd_.saturated) regulator_.integrate(error_.tail<6>());
   if (zeroIfNonFinite(cmd_.torque) != Fault::kNone) return fail(Fault::kNonFiniteResult);

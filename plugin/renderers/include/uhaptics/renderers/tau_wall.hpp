@@ -208,6 +208,13 @@ class LqrWallRenderer {
     // true: push only (release when the tool leaves the surface and the controller would pull);
     // false: paper 001's position hold, bilateral while in contact (used by the study).
     bool unilateral = true;
+    // false: per-joint saturation (what the motors do; the unsaturated joints keep holding at full
+    // gain, so the contact force bends away from the normal). true: the contact torque is scaled
+    // down as a whole until gravity compensation plus it fit the torque limits, so the wall pushes
+    // less hard but still along its normal (for a tool the user moves freely along the surface,
+    // where a bent force pushes it sideways: tests/tau, 14 N into a wall tilted 30 deg is held at
+    // 0.5 mm with it and lost without it).
+    bool keep_direction = false;
   };
   LqrWallRenderer(const TauModel& model, const LqrWallGains& gains, const Options& options);
   LqrWallRenderer(const TauModel& model, const LqrWallGains& gains) : LqrWallRenderer(model, gains, Options{}) {}
