@@ -46,6 +46,12 @@ std::string readFile(const std::string& path) {
   return text.str();
 }
 
+// The null-space envelope's ramp r(t) (FmeControllerOptions::null_space_ramp_time).
+double rampAt(double a_time, double a_rampTime) {
+  const double u = a_time / a_rampTime;
+  return u < 1.0 ? 0.5 * (1.0 - std::cos(M_PI * u)) : 1.0;
+}
+
 }  // namespace
 
 TEST_CASE("rhi: specification complete and consistent with the model", "[chai3d_adapters][rhi]") {
@@ -199,6 +205,128 @@ TEST_CASE("rhi: a stock cToolCursor palpates a cShapeBox (potential field) and i
   CHECK(deepest < 0.015);
   CHECK(stats.peak_force == Approx(peak).epsilon(1e-9));
   scene.tool->stop();
+}
+
+TEST_CASE("rhi: in an empty scene the null-space torque ramps up from zero and stays within its bound",
+          "[chai3d_adapters][rhi]") {
+  // An unchanged CHAI3D application with nothing to touch: the default scripted hand (the drop-in
+  // examples') moves the device, the cursor renders no force. From home the FME gradient asks for
+  // 5.4 N m (beta = 20); without the envelope the first tick commanded the full 3 N m.
+  uhaptics::DeviceSelection selection;
+  selection.device = "rhi";
+  auto device = cRedundantPlanarDevice::create(selection);
+  const auto options = device->getNullSpaceOptions();
+  const double bound = options.max_null_space_torque, ramp = options.null_space_ramp_time;
+  CHECK(bound == cRedundantPlanarDevice::kDefaultMaxNullSpaceTorque);
+  CHECK(ramp == cRedundantPlanarDevice::kDefaultNullSpaceRampTime);
+  CHECK(bound <= 0.5 * device->getModel().torqueLimits().minCoeff());  // well below every actuator's limit
+  device->setLockStep(true);
+  ToolScene scene(device, 0.005);
+  REQUIRE(scene.tool->start());
+  const double dt = device->getServoPeriod();
+  Model::JointVector previous = Model::JointVector::Zero();
+  double first_steps = 0.0;  // largest per-tick change of tau_N over the first 100 ticks
+  for (int i = 0; i < 5000; ++i) {  // 5 s: more than a lap of the hand (4 s)
+    scene.tick();
+    REQUIRE(device->getLastFault() == uhaptics::Fault::kNone);
+    REQUIRE(scene.tool->getDeviceLocalForce().length() == 0.0);  // empty: the primary task J^T F is zero
+    const auto status = device->getNullSpaceStatus();
+    if (i == 0) CHECK(status.tau_null.isZero());
+    // Never above the ramped bound r(t) B (1e-12: round-off of the scale B / |tau_N,cmd|).
+    CHECK(status.tau_null.norm() <= rampAt(i * dt, ramp) * bound + 1e-12);
+    if (i < 100) first_steps = std::max(first_steps, (status.tau_null - previous).norm());
+    previous = status.tau_null;
+  }
+  scene.tool->stop();
+  const auto stats = device->getSessionStats();
+  // The bound on what the actuators are told: tau = J^T F + tau_N with F = 0 here, so every
+  // |tau_i| <= |tau_N|_2 <= B. And the bound is what holds it: the start-up command is 11 B.
+  CHECK(stats.peak_output <= bound * (1.0 + 1e-12));
+  CHECK(stats.peak_output > 0.9 * bound);
+  CHECK(stats.figure("max_null_space_torque_Nm")->value == Approx(bound).epsilon(1e-9));
+  // Smooth start: the half cosine rises by at most pi dt / (2 T) = 0.63 % of B per tick; the
+  // command's own turning while the arm starts from rest adds little (0.62 % measured). 1 % of B.
+  INFO("largest step over the first 100 ticks " << first_steps << " N m");
+  CHECK(first_steps <= 0.01 * bound);
+  // Nothing to press: the desired ellipsoid stays the free one, the force is never scaled.
+  CHECK(stats.figure("free_to_stiff")->value == 0.0);
+  CHECK(stats.figure("stiff_to_free")->value == 0.0);
+  CHECK(stats.figure("stiff_ticks")->value == 0.0);
+  CHECK(stats.figure("max_force_scale_reduction")->value == 0.0);
+  // A reopened device starts its ramp again from zero.
+  REQUIRE(device->open());
+  device->setForce(cVector3d(0.0, 0.0, 0.0));
+  CHECK(device->getNullSpaceStatus().tau_null.isZero());
+  device->setForce(cVector3d(0.0, 0.0, 0.0));
+  CHECK(device->getNullSpaceStatus().tau_null.norm() > 0.0);
+  CHECK(device->getNullSpaceStatus().tau_null.norm() <= rampAt(dt, ramp) * bound + 1e-12);
+  CHECK(device->close());
+}
+
+TEST_CASE("rhi: a stock cToolCursor pressing a stiff object switches to the stiff ellipsoid and back smoothly",
+          "[chai3d_adapters][rhi]") {
+  auto device = cRedundantPlanarDevice::create(rhiSelection());  // the hand palpates down and back, 2 s a lap
+  device->setLockStep(true);
+  const double stiffness = device->getSpecifications().m_maxLinearStiffness;  // paper 003's 1000 N/m
+  ToolScene scene(device, 0.005);
+  SECTION("a mesh (finger proxy)") { scene.addBlock(0.3, stiffness); }
+  SECTION("a cShapeBox (potential field)") {
+    const double r = device->getSpecifications().m_workspaceRadius;
+    cShapeBox* box = new cShapeBox(4 * r, 4 * r, 2 * r);
+    scene.world.addChild(box);
+    box->setLocalPos(0.0, 0.0, -1.3 * r);  // top face 3 cm below home, as the mesh's
+    box->m_material->setStiffness(stiffness);
+    box->createEffectSurface();
+  }
+  REQUIRE(scene.tool->start());
+  const double bound = device->getNullSpaceOptions().max_null_space_torque;
+  int to_stiff = 0, to_free = 0, stiff_ticks = 0;
+  bool heading_stiff = false;
+  double largest_reduction = 0.0, largest_null = 0.0, transition_step = 0.0;
+  Model::JointVector previous = Model::JointVector::Zero();
+  uhaptics::FmeControllerStatus<4, 2> status;
+  for (int i = 0; i < 4000; ++i) {  // two presses and releases
+    scene.tick();
+    REQUIRE(device->getLastFault() == uhaptics::Fault::kNone);
+    status = device->getNullSpaceStatus();
+    // The primary task keeps its authority, the null space stays within its bound: every actuator
+    // gets at most its share of J^T (alpha F) plus B (1e-12: round-off of the scale).
+    CHECK(status.tau_null.norm() <= bound * (1.0 + 1e-12));
+    const double output = (status.tau_primary + status.tau_null).cwiseAbs().maxCoeff();
+    CHECK(output <= status.tau_primary.cwiseAbs().maxCoeff() + bound * (1.0 + 1e-12));
+    const bool stiff_target = status.omega_target == 0.0;
+    const bool switched = stiff_target != heading_stiff;
+    if (switched) ++(stiff_target ? to_stiff : to_free);
+    heading_stiff = stiff_target;
+    if (status.omega < 1.0) ++stiff_ticks;
+    const double step = (status.tau_null - previous).norm();
+    if (switched || stiff_target || status.omega < 1.0) transition_step = std::max(transition_step, step);
+    previous = status.tau_null;
+    largest_reduction = std::max(largest_reduction, 1.0 - status.alpha);
+    largest_null = std::max(largest_null, status.tau_null.norm());
+  }
+  scene.tool->stop();
+  const auto stats = device->getSessionStats();
+  INFO("to stiff " << to_stiff << ", to free " << to_free << ", stiff ticks " << stiff_ticks
+                   << ", largest null-space step in a switch or blend " << transition_step << " N m");
+  // The figures the drop-in scenes read say what the controller did.
+  CHECK(stats.figure("free_to_stiff")->value == to_stiff);
+  CHECK(stats.figure("stiff_to_free")->value == to_free);
+  CHECK(stats.figure("stiff_ticks")->value == stiff_ticks);
+  CHECK(stats.figure("max_force_scale_reduction")->value == largest_reduction);
+  CHECK(stats.figure("max_null_space_torque_Nm")->value == largest_null);
+  // The press drove the observer below eps1 (stiff ellipsoid), the release back above eps2, and
+  // the blend back to the free ellipsoid completed.
+  CHECK(to_stiff >= 1);
+  CHECK(stiff_ticks > 0);
+  CHECK(to_free >= 1);
+  CHECK(status.omega == 1.0);
+  // No discontinuity across the switches and blends: at most 0.8 B per tick (0.27 N m on the
+  // mesh, 0.20 N m on the shape measured: the command's own rate where the FME and joint-limit
+  // terms cross while the arm swings along its self-motion). A reversal of the bounded torque
+  // would be 2 B; the release step when the stiff axis followed the vanishing proxy force was
+  // 1.4 B, 6.4 N m without the bound.
+  CHECK(transition_step <= 0.8 * bound);
 }
 
 TEST_CASE("rhi: null-space options from CHAI3D code, the selection and the config file", "[chai3d_adapters][rhi]") {

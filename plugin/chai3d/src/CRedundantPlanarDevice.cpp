@@ -25,6 +25,10 @@ uhaptics::FmeControllerOptions<2> optionsFrom(const uhaptics::DeviceSelection& s
   o.limit_gain = s.option("limit_gain", o.limit_gain, 0.0, 100.0);
   o.limit_margin = s.option("limit_margin", o.limit_margin, 1e-3, 1.0);
   o.limit_speed = s.option("limit_speed", o.limit_speed, 0.0, 100.0);
+  // The null-space torque envelope (the paper's controller has none; see the class comment).
+  o.max_null_space_torque = s.option("max_null_space_torque", cRedundantPlanarDevice::kDefaultMaxNullSpaceTorque, 0.01, 10.0);
+  o.null_space_ramp_time = s.option("null_space_ramp_time", cRedundantPlanarDevice::kDefaultNullSpaceRampTime, 0.0, 10.0);
+  o.stiff_direction_time = s.option("stiff_direction_time", cRedundantPlanarDevice::kDefaultStiffDirectionTime, 0.0, 1.0);
   return o;
 }
 
@@ -40,6 +44,12 @@ cRedundantPlanarDevice::cRedundantPlanarDevice(unsigned int a_deviceNumber, cons
     throw uhaptics::Error(std::string("device rhi (options/rhi/...): ") + e.what());
   }
   model.forward(model.home(), m_centre);
+  using Kind = uhaptics::RendererFigure::Kind;
+  m_figureFreeToStiff = sessionStats().declareFigure("free_to_stiff", Kind::kCount);
+  m_figureStiffToFree = sessionStats().declareFigure("stiff_to_free", Kind::kCount);
+  m_figureStiffTicks = sessionStats().declareFigure("stiff_ticks", Kind::kCount);
+  m_figureForceScaleReduction = sessionStats().declareFigure("max_force_scale_reduction", Kind::kMaximum);
+  m_figureNullSpaceTorque = sessionStats().declareFigure("max_null_space_torque_Nm", Kind::kMaximum);
 
   // The force the device can produce in every direction at home: torques tau = J^T F within the
   // ellipse sum (tau_i / T_i)^2 <= 1 allow |F| = 1 / sqrt(u^T J W^2 J^T u) along u; the minimum
@@ -63,7 +73,8 @@ cRedundantPlanarDevice::cRedundantPlanarDevice(unsigned int a_deviceNumber, cons
 cRedundantPlanarDevice::~cRedundantPlanarDevice() { close(); }
 
 void cRedundantPlanarDevice::startBackend() {
-  m_controller->reset();
+  m_controller->reset();  // free-motion ellipsoid; the null-space torque ramps up from zero
+  m_stiffTarget = m_controller->status().omega_target == 0.0;
   m_tau.setZero();
   m_qd.setZero();
   m_rate.reset();
@@ -99,6 +110,7 @@ uhaptics::Fault cRedundantPlanarDevice::servoTick(const ServoInput& a_input, dou
   // A planar device: only the in-plane force is rendered (no torque, x not actuated).
   const uhaptics::Fault fault = m_controller->tick(a_input.time, m_q, m_qd, deviceToPlanar(a_input.force), m_tau);
   a_outputMagnitude = m_tau.cwiseAbs().maxCoeff();
+  recordFigures(m_controller->status());
   uhaptics::Fault backend_fault = uhaptics::Fault::kNone;
   if (hasBoard()) {
     commandBoard(m_tau.data());
@@ -112,6 +124,19 @@ uhaptics::Fault cRedundantPlanarDevice::servoTick(const ServoInput& a_input, dou
   }
   updateState();
   return fault != uhaptics::Fault::kNone ? fault : backend_fault;
+}
+
+void cRedundantPlanarDevice::recordFigures(const Controller::Status& a_status) noexcept {
+  uhaptics::SessionStats& stats = sessionStats();
+  // A switch is where the desired ellipsoid starts moving towards the other one (the observer's
+  // hysteresis decision, or a change of mode); a reversal mid-blend counts as a switch back.
+  const bool stiff_target = a_status.omega_target == 0.0;
+  if (stiff_target && !m_stiffTarget) stats.count(m_figureFreeToStiff);
+  if (!stiff_target && m_stiffTarget) stats.count(m_figureStiffToFree);
+  m_stiffTarget = stiff_target;
+  if (a_status.omega < 1.0) stats.count(m_figureStiffTicks);  // any share of the stiff ellipsoid, blends included
+  stats.observeMaximum(m_figureForceScaleReduction, 1.0 - a_status.alpha);
+  stats.observeMaximum(m_figureNullSpaceTorque, a_status.tau_null.norm());
 }
 
 void cRedundantPlanarDevice::updateState() noexcept {

@@ -14,6 +14,8 @@
 // smooth barrier of the device's joint limits (joint_limits.hpp): zero away from them, so the
 // paper's controller is unchanged there, and growing without bound at them, so the self-motion
 // never drives the arm into a stop (the paper's device has them; the paper does not model them).
+// Optionally (a device's safety envelope, not the paper's) the null-space torque is bounded in norm
+// and rises smoothly after reset() instead of starting at whatever the gradient asks for.
 //
 // Generic over any model satisfying the kinematic-model interface with kJoints > kTask; uses the
 // model's Jacobian derivatives, mass matrix and joint limits when it has them (model_capabilities.hpp). The
@@ -22,6 +24,7 @@
 // the torque limits.
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <tuple>
 
 #include "uhaptics/core/ellipsoid_transition.hpp"
@@ -56,6 +59,13 @@ struct FmeControllerOptions {
   fme::GradientMethod gradient = fme::GradientMethod::kAnalytic;
   double contact_force_threshold = 1e-6;  // |F| below this counts as free motion [N]
   double min_inverse_condition = 1e-6;    // lambda_min / lambda_max of J W W J^T below this = singular
+  // The stiff ellipsoid's major axis follows the contact force's direction through a first-order
+  // filter with this time constant while any of the stiff ellipsoid is in use (it takes the force's
+  // direction directly while the free one is settled, so a switch starts from the current force).
+  // Why: a CHAI3D proxy's force turns by a few degrees within a tick when its tangential part
+  // resets (about every 6 ms on a mesh pressed by the RHI), and the stiff ellipsoid's 37:1 axes
+  // turn the null-space torque with it by up to 0.3 N m per tick. 0: each tick's force (the paper).
+  double stiff_direction_time = 0.0;  // [s], >= 0
   // Joint-limit avoidance (limits from the model's jointLimits() or setJointLimits()): barrier
   // active within limit_margin of a bound, torque limit_gain (1 - margin^2 / d^2) at distance d.
   // limit_gain = 0 turns it off. Assumed values (the paper has no limit term): 0.5 N m and
@@ -64,8 +74,17 @@ struct FmeControllerOptions {
   double limit_margin = 0.25; // delta [rad]
   // Approach-speed cap (a velocity damper): a limited coordinate s_j = C_j q may approach a bound
   // at most at limit_speed, falling in proportion to the distance inside the margin (zero at the
-  // bound); faster approach is braked by (C_j M C_j^T / limit_brake_time) times the excess,
-  // projected into the null space like the barrier. Why: the barrier is a potential and cannot
+  // bound); faster approach is braked by (m_j / limit_brake_time) times the excess, projected into
+  // the null space like the barrier, with m_j = 1 / (C_j M^-1 P C_j^T) the inertia the coordinate
+  // shows to a null-space torque along C_j (P = I - J^T J#^T; M^-1 P is the null-space mobility),
+  // so one tick removes dt / limit_brake_time of the excess (0.2 at 1 kHz, 5 ms) whatever the
+  // configuration. (C_j M C_j^T misjudges it both ways on the RHI, up to 14 times too large,
+  // which makes the per-tick gain 2.8 and the brake unstable, and up to 44 times too small
+  // (tests/rhi); 9 times too large for q1 - q2 with a CHAI3D cursor on a mesh, where the brake
+  // rang at the servo rate and stepped the null-space torque by 6.4 N m per tick.) Where the
+  // coordinate can hardly move in the null space, m_j is capped at 100 / (C_j M^-1 C_j^T)
+  // (mobility at least 1 % of the unconstrained one): a stop the null space cannot reach is not
+  // braked with unbounded torque. Why the brake: the barrier is a potential and cannot
   // dissipate; with beta = 20 the free-to-stiff switch swings the RHI along its self-motion at up
   // to 15 rad/s, too fast to stop within the margin with 3 N m, so the arm reached the stop, whose
   // reaction is not in the null space, and kicked the end effector through the rendered surface
@@ -73,6 +92,18 @@ struct FmeControllerOptions {
   // palpation stay below 1 rad/s), 5 ms. limit_speed = 0 turns it off.
   double limit_speed = 2.0;        // [rad/s]
   double limit_brake_time = 0.005;  // [s] (5 servo periods at 1 kHz: stable in discrete time for T > dt / 2)
+  // Null-space torque envelope: tau_N = r(t) min(1, max_null_space_torque / |tau_N,cmd|) tau_N,cmd
+  // (Euclidean norm, one scale for the whole vector: its direction is kept, so the FME and
+  // joint-limit terms keep their balance), before the actuator-limit fit. r rises as a half cosine,
+  // r = (1 - cos(pi s)) / 2 with s = (t - t_0) / null_space_ramp_time, from 0 at the first tick after
+  // reset() or after a tick that dropped the null-space torque (a fault) to 1: |tau_N| <= r
+  // max_null_space_torque always, and per tick r grows by at most pi dt / (2 null_space_ramp_time).
+  // The primary task J^T (alpha F) is not affected. Why: from the home configuration the FME
+  // gradient asks for 5.4 N m (beta = 20) at the first tick, so an unbounded controller steps the
+  // RHI's actuators from 0 to their 3 N m limit with no contact at all. Defaults: unbounded and no
+  // ramp (0), the paper's controller; the CHAI3D device sets its own (CRedundantPlanarDevice.hpp).
+  double max_null_space_torque = std::numeric_limits<double>::infinity();  // [N m], > 0
+  double null_space_ramp_time = 0.0;                                       // [s], >= 0 (0: no ramp)
 };
 
 /// What one tick computed (for logging and figures).
@@ -81,14 +112,17 @@ struct FmeControllerStatus {
   Fault fault = Fault::kNone;
   double observer = 1.0;   // V
   double omega = 1.0;      // activation (1 = free ellipsoid, 0 = stiff)
+  double omega_target = 1.0;  // where omega is going (1 free, 0 stiff); equal to omega when settled
   double cost = 0.0;       // nu
   double alpha = 1.0;      // force scaling
   double null_space_scale = 1.0;  // fraction of the FME null-space torque kept to stay within the torque limits
+  double null_space_ramp = 1.0;   // start-up ramp r in [0, 1] (Options::null_space_ramp_time)
+  double null_space_bound_scale = 1.0;  // min(1, max_null_space_torque / |tau_null_command|)
   bool skipped_contact_work = false;  // free-motion fast path taken
   Vec<kTask> force = Vec<kTask>::Zero();  // force actually commanded (alpha F)
   Vec<kJoints> tau_primary = Vec<kJoints>::Zero();
-  Vec<kJoints> tau_null = Vec<kJoints>::Zero();          // applied null-space torque (after limits)
-  Vec<kJoints> tau_null_command = Vec<kJoints>::Zero();  // (I - J^T J#^T) tau_S before the limits
+  Vec<kJoints> tau_null = Vec<kJoints>::Zero();          // applied null-space torque (after ramp, bound, limits)
+  Vec<kJoints> tau_null_command = Vec<kJoints>::Zero();  // (I - J^T J#^T) tau_S before ramp, bound, limits
   Vec<kJoints> tau_limit_command = Vec<kJoints>::Zero();  // its joint-limit avoidance part
 };
 
@@ -124,7 +158,8 @@ class FmeNullSpaceController {
       throw Error("FME controller: the home configuration is singular (no force manipulability ellipsoid)");
     if (setOptions(options) != Fault::kNone)
       throw Error("FME controller: invalid options (gains must be finite and >= 0, mu > 0, thresholds in "
-                  "[0, 1] with eps1 <= eps2, a non-zero motion direction)");
+                  "[0, 1] with eps1 <= eps2, a non-zero motion direction, max_null_space_torque > 0, "
+                  "null_space_ramp_time and stiff_direction_time finite and >= 0)");
     reset();
   }
 
@@ -139,7 +174,9 @@ class FmeNullSpaceController {
                     o.min_inverse_condition > 0.0 && o.min_inverse_condition < 1.0 && std::isfinite(o.limit_gain) &&
                     o.limit_gain >= 0.0 && std::isfinite(o.limit_margin) && o.limit_margin > 0.0 &&
                     std::isfinite(o.limit_speed) && o.limit_speed >= 0.0 && std::isfinite(o.limit_brake_time) &&
-                    o.limit_brake_time > 0.0;
+                    o.limit_brake_time > 0.0 && o.max_null_space_torque > 0.0 &&
+                    std::isfinite(o.null_space_ramp_time) && o.null_space_ramp_time >= 0.0 &&
+                    std::isfinite(o.stiff_direction_time) && o.stiff_direction_time >= 0.0;
     if (!ok) return Fault::kInvalidParameter;
     const fme::EllipsoidScales s = fme::ellipsoidScales(home_fme_, o.mu);
     const double major = o.major_axis > 0.0 ? o.major_axis : s.major;
@@ -172,12 +209,16 @@ class FmeNullSpaceController {
     return Fault::kNone;
   }
 
-  /// Back to the free-motion ellipsoid with nothing in progress.
+  /// Back to the free-motion ellipsoid (the stiff one in FmeEllipsoidMode::kStiff) with nothing in
+  /// progress; the null-space torque ramps up again from the next tick (Options::null_space_ramp_time).
   void reset() noexcept {
     transition_.reset(options_.mode == FmeEllipsoidMode::kStiff ? 0.0 : 1.0);
-    stiff_direction_ = options_.motion_direction;
+    stiff_direction_ = options_.motion_direction.normalized();
     fme::axisAlignedEllipsoid(stiff_direction_, major_, minor_, stiff_fme_);
+    direction_time_ = kNever;
     status_ = Status{};
+    status_.omega = status_.omega_target = transition_.omega();
+    ramp_start_ = kNever;
   }
 
   /// One servo tick at time t [s]: joint state (q, q_dot), requested end-effector force F.
@@ -205,14 +246,19 @@ class FmeNullSpaceController {
       status_.observer = saturationObserver(status_.tau_primary, limits_, options_.observer_shape);
       status_.alpha = scaleIntoBox(status_.tau_primary, limits_);
       status_.force = status_.alpha * F;
-      if (contact) {
-        stiff_direction_ = F;
+      // The stiff ellipsoid's major axis follows the contact force, except while the blend back to
+      // the free one runs: that starts when the force has fallen (V >= eps2), and as it vanishes
+      // (a proxy leaving a surface) its direction is undefined and can turn through 180 deg within
+      // a few ticks, which swept the desired ellipsoid round and stepped the null-space torque by
+      // up to 6.9 N m per tick (CHAI3D cursor released from a mesh, tests/chai3d_adapters).
+      const bool leaving_stiff = transition_.target() == 1.0 && transition_.inProgress();
+      if (contact && !leaving_stiff) {
+        followContactDirection(t, F);
         fme::axisAlignedEllipsoid(stiff_direction_, major_, minor_, stiff_fme_);
       }
       updateDesired(t);
     }
     tau = status_.tau_primary;
-    status_.omega = transition_.omega();
 
     // Secondary task in the null space. Failure here leaves the primary task alone.
     if (!fme::fmeCostGradient(model_, q, J_, inv_limits_sq_, desired_, options_.gradient, status_.cost, grad_,
@@ -228,14 +274,19 @@ class FmeNullSpaceController {
     } else {
       mass_.setIdentity();
     }
-    if (options_.dynamically_consistent) {
-      Eigen::LLT<Mat<N, N>> llt(mass_);
-      if (llt.info() != Eigen::Success) return finish(Fault::kInvalidParameter, tau, true);
+    Eigen::LLT<Mat<N, N>> llt(mass_);
+    const bool mass_valid = llt.info() == Eigen::Success;
+    if (mass_valid) {
       mass_inv_ = llt.solve(Mat<N, N>::Identity());
+    } else if (options_.dynamically_consistent) {
+      return finish(Fault::kInvalidParameter, tau, true);
     } else {
-      mass_inv_.setIdentity();
+      mass_inv_.setIdentity();  // kinematic projector: the mass matrix only sizes the limit brake
     }
-    if (!nullSpaceProjector(J_, mass_inv_, projector_)) return finish(Fault::kSingular, tau, true);
+    const bool projected = options_.dynamically_consistent
+                               ? nullSpaceProjector(J_, mass_inv_, projector_)
+                               : nullSpaceProjector(J_, Mat<N, N>(Mat<N, N>::Identity()), projector_);
+    if (!projected) return finish(Fault::kSingular, tau, true);
     const JointVector tau_s = -options_.beta * grad_ - options_.damping * qd;
     status_.tau_null_command.noalias() = projector_ * tau_s;
     status_.tau_limit_command.setZero();
@@ -246,11 +297,17 @@ class FmeNullSpaceController {
       status_.tau_limit_command.noalias() = projector_ * limit_grad_;
       status_.tau_null_command += status_.tau_limit_command;
     }
-    // Keep the primary task intact: shrink tau_N until every joint is within its limit. The FME and
+    // The envelope (ramp and norm bound), then keep the primary task intact: shrink tau_N until
+    // every joint is within its limit. Each is one scale of the whole vector: the FME and
     // joint-limit terms shrink together, so where they balance (the settled configuration near a
     // limit) they still do.
-    const double gamma = fitIntoLimits(tau, status_.tau_null_command);
-    status_.tau_null = gamma * status_.tau_null_command;
+    status_.null_space_ramp = rampAt(t);
+    const double command_norm = status_.tau_null_command.norm();
+    status_.null_space_bound_scale =
+        command_norm > options_.max_null_space_torque ? options_.max_null_space_torque / command_norm : 1.0;
+    status_.tau_null = (status_.null_space_ramp * status_.null_space_bound_scale) * status_.tau_null_command;
+    const double gamma = fitIntoLimits(tau, status_.tau_null);
+    status_.tau_null *= gamma;
     tau += status_.tau_null;
     status_.null_space_scale = gamma;
     return finish(Fault::kNone, tau, true);
@@ -270,6 +327,31 @@ class FmeNullSpaceController {
   const JointLimits<N>& jointLimits() const noexcept { return joint_limits_; }
 
  private:
+  // stiff_direction_ (a unit vector) towards the direction of F (|F| > 0), see Options::stiff_direction_time.
+  void followContactDirection(double t, const TaskVector& F) noexcept {
+    TaskVector u = F / F.norm();
+    const double dt = t - direction_time_;
+    direction_time_ = t;
+    if (!(options_.stiff_direction_time > 0.0) || transition_.settledFree() || !(dt > 0.0)) {
+      stiff_direction_ = u;
+      return;
+    }
+    if (u.dot(stiff_direction_) < 0.0) u = -u;  // the ellipsoid of -u is the same: turn the short way
+    const double k = 1.0 - std::exp(-dt / options_.stiff_direction_time);
+    const TaskVector d = stiff_direction_ + k * (u - stiff_direction_);  // |d| >= 1/sqrt(2): at most 90 deg apart
+    stiff_direction_ = d / d.norm();
+  }
+
+  // The start-up ramp r(t) (Options::null_space_ramp_time); the first call after reset() or a
+  // dropped null space starts it (r = 0 there).
+  double rampAt(double t) noexcept {
+    if (ramp_start_ == kNever) ramp_start_ = t;
+    if (!(options_.null_space_ramp_time > 0.0)) return 1.0;
+    const double s = (t - ramp_start_) / options_.null_space_ramp_time;
+    if (!(s < 1.0)) return 1.0;
+    return 0.5 * (1.0 - std::cos(M_PI * std::max(s, 0.0)));
+  }
+
   // Largest gamma in [0, 1] with |base_i + gamma add_i| <= T_i wherever add moves base outwards
   // (base itself is within the limits).
   double fitIntoLimits(const JointVector& base, const JointVector& add) const noexcept {
@@ -285,8 +367,9 @@ class FmeNullSpaceController {
   }
 
   // Adds to tau the velocity damper of every bound within the margin (see Options::limit_speed).
-  void addLimitBrake(const JointVector& q, const JointVector& qd, JointVector& tau) const noexcept {
+  void addLimitBrake(const JointVector& q, const JointVector& qd, JointVector& tau) noexcept {
     const double margin = options_.limit_margin;
+    mobility_.noalias() = mass_inv_ * projector_;  // joint accelerations per unit of null-space torque
     for (int j = 0; j < N; ++j) {
       const auto row = joint_limits_.map.row(j);
       const double s = row.dot(q), sd = row.dot(qd);
@@ -297,7 +380,9 @@ class FmeNullSpaceController {
         if (!std::isfinite(distance)) continue;
         const double excess = approach - options_.limit_speed * std::clamp(distance / margin, 0.0, 1.0);
         if (excess <= 0.0) continue;
-        const double inertia = row * mass_ * row.transpose();
+        const double free_mobility = row * mass_inv_ * row.transpose();
+        const double null_mobility = row * mobility_ * row.transpose();
+        const double inertia = 1.0 / std::max(null_mobility, kMinNullMobility * free_mobility);
         tau += (sign * inertia * excess / options_.limit_brake_time) * row.transpose();
       }
     }
@@ -327,7 +412,11 @@ class FmeNullSpaceController {
       status_.tau_null.setZero();
       status_.tau_null_command.setZero();
       status_.tau_limit_command.setZero();
+      status_.null_space_ramp = 0.0;
+      ramp_start_ = kNever;  // the null space dropped out: it ramps up again, never steps back in
     }
+    status_.omega = transition_.omega();
+    status_.omega_target = transition_.target();
     if (zeroIfNonFinite(tau) != Fault::kNone && fault == Fault::kNone) fault = Fault::kNonFiniteResult;
     clampSymmetric(tau, limits_);
     status_.fault = fault;
@@ -346,10 +435,14 @@ class FmeNullSpaceController {
   TaskVector stiff_direction_ = TaskVector::Unit(M - 1);
   EllipsoidTransition transition_;
   Status status_;
+  static constexpr double kNever = -std::numeric_limits<double>::infinity();  // a time not yet set
+  double ramp_start_ = kNever;  // time of the ramp's first tick
+  double direction_time_ = kNever;  // time of the last contact-direction update
   // Workspace (preallocated: the tick touches no heap).
   Mat<M, N> J_;
   JointVector grad_ = JointVector::Zero(), limit_grad_ = JointVector::Zero();
-  Mat<N, N> mass_ = Mat<N, N>::Identity(), mass_inv_, projector_;
+  Mat<N, N> mass_ = Mat<N, N>::Identity(), mass_inv_, projector_, mobility_;
+  static constexpr double kMinNullMobility = 0.01;  // limit brake: share of the unconstrained mobility
 };
 
 }  // namespace uhaptics
