@@ -119,6 +119,7 @@ class cTauDevice : public cUhapticsDevice {
   void trackSurface(const uhaptics::Vec3& a_force, const uhaptics::Vec3& a_position, double a_stiffness,
                     double a_turnGain) noexcept;
   void release() noexcept;
+  double perTick(double a_gain) const noexcept;
   void updateState() noexcept;  // m_state from the simulated device or the board's reading
 
   std::unique_ptr<const uhaptics::TauModel> m_model;  // sim and renderers keep references
@@ -138,6 +139,7 @@ class cTauDevice : public cUhapticsDevice {
   int m_quietTicks = 0;             // consecutive ticks out of contact (release hysteresis)
   uhaptics::Vec3 m_lastForce = uhaptics::Vec3::Zero();     // the application's last new force
   uhaptics::Vec3 m_lastPosition = uhaptics::Vec3::Zero();  // the position it was computed at
+  int m_framesTicks = 0;            // servo ticks since the last new force
   int m_overloadTicks = 0;          // consecutive held ticks with a saturated wall command
   double m_probeForce = 0.0;        // probe: force rise and depth along the normal since the onset
   double m_probeDepth = 0.0;
