@@ -166,6 +166,7 @@ void cTauDevice::startBackend() {
   m_held = false;
   m_surface.active = false;
   m_lastForce.setZero();
+  m_framesTicks = 0;
   m_stiffness = 0.0;
   m_lqrEngaged = false;
   m_tau.setZero();
@@ -207,6 +208,12 @@ void cTauDevice::release() noexcept {
   m_surface.active = false;
 }
 
+double cTauDevice::perTick(double a_gain) const noexcept {
+  // The filters' gains are per servo tick; an application slower than the servo sends a new force
+  // every few ticks, and each then counts for all of them (time constants in time, not in frames).
+  return m_framesTicks <= 1 ? a_gain : 1.0 - std::pow(1.0 - a_gain, std::min(m_framesTicks, 50));
+}
+
 void cTauDevice::trackSurface(const uhaptics::Vec3& a_force, const uhaptics::Vec3& a_position, double a_stiffness,
                               double a_turnGain) noexcept {
   // A force below kTrackForce, or one pointing into the surface (proxy jitter), is no evidence.
@@ -243,7 +250,7 @@ void cTauDevice::trackSurface(const uhaptics::Vec3& a_force, const uhaptics::Vec
   const uhaptics::Vec3 turn = normalForce / length - m_normal;
   const uhaptics::Vec3 alongPath = turn.dot(path) * path;  // = -(n . path) path: geometry, not F
   const double weight = std::min(1.0, length / kHoldForce);  // a small force counts in proportion
-  const uhaptics::Vec3 normal = m_normal + kPathGain * alongPath + weight * a_turnGain * (turn - alongPath);
+  const uhaptics::Vec3 normal = m_normal + perTick(kPathGain) * alongPath + weight * perTick(a_turnGain) * (turn - alongPath);
   const double norm = normal.norm();
   if (norm > 1e-9 && std::isfinite(norm)) m_normal = normal / norm;
 }
@@ -264,6 +271,9 @@ void cTauDevice::updateContact(const uhaptics::Vec3& a_force, const uhaptics::Ve
   // A force the application has not sent before was computed from the position it read last (the
   // one reported after the previous tick); a repeated one is older and says nothing new.
   const bool fresh = (a_force.array() != m_lastForce.array()).any();
+  // Servo ticks since the last new force, this one included, counted while that force was a
+  // contact (a force that stayed zero held no information to wait for).
+  m_framesTicks = m_lastForce.norm() >= kTrackForce ? m_framesTicks + 1 : 1;
 
   if (m_contact == Contact::kFree) {
     if (magnitude > m_contactForce && std::isfinite(magnitude)) startContact(a_force, mode);
@@ -314,12 +324,13 @@ void cTauDevice::updateContact(const uhaptics::Vec3& a_force, const uhaptics::Ve
       if (fresh) trackSurface(a_force, a_position, m_stiffness, kSlowGain);
       if (fresh && m_hasProxy) {
         step = m_proxy - (kHoldForce / m_stiffness) * m_normal - m_surface.point;
-        gain = kOffsetGain;
+        gain = perTick(kOffsetGain);
       } else if (m_held && magnitude < kTrackForce) {
         step = -kCreepSpeed * getServoPeriod() * m_normal;
       }
       const double along = m_normal.dot(step);
-      step += (std::min(kPlaneStep, std::max(-kPlaneStep, gain * along)) - along) * m_normal;
+      const double most = kPlaneStep * std::max(1, std::min(m_framesTicks, 50));  // 50 mm/s
+      step += (std::min(most, std::max(-most, gain * along)) - along) * m_normal;
       m_surface.point += step;
       m_surface.normal = m_normal;
     }
@@ -327,6 +338,7 @@ void cTauDevice::updateContact(const uhaptics::Vec3& a_force, const uhaptics::Ve
   if (fresh) {
     m_lastForce = a_force;
     m_lastPosition = a_position;
+    m_framesTicks = 0;
   }
 }
 

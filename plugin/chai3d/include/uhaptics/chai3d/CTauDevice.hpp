@@ -46,12 +46,13 @@
 //   the tool at the plane leaves and re-enters it at the tick rate, and bounces off the wall
 //   for tens of ms under a light hand) -- force below half of contact_force, or below 0.05 N while
 //   the wall holds the tool (a plane above the surface). A renewed push before then is held again
-//   at once, without a new probe. A wall saturated for 20 ms without a break
-//   cannot hold the contact: the spring takes it over ("lqr_overloads").
+//   at once, without a new probe. A wall saturated for 20 ms without a break cannot hold the
+//   contact: the spring takes it over ("lqr_overloads").
 //
 //   Renderer figures (session statistics, counts unless noted): lqr_engagements, lqr_releases,
 //   lqr_held_ticks (servo ticks held by the wall), max_penetration_mm (maximum: deepest below the
-//   wall's plane while held), lqr_saturated_ticks (held ticks whose wall command hit a torque
+//   wall's plane while held; the plane itself is kHoldForce / k, 0.1 mm at 4800 N/m, below the
+//   application's surface), lqr_saturated_ticks (held ticks whose wall command hit a torque
 //   limit), spring_contact_ticks (ticks with a force of at least half contact_force rendered by the
 //   spring), soft_surface_contacts, soft_stiffness_max_N_per_m (maximum), lqr_overloads.
 // Simulated backend: SimulatedTau (lumped dynamics, quantized encoders, torque saturation) with the
@@ -119,6 +120,7 @@ class cTauDevice : public cUhapticsDevice {
   void trackSurface(const uhaptics::Vec3& a_force, const uhaptics::Vec3& a_position, double a_stiffness,
                     double a_turnGain) noexcept;
   void release() noexcept;
+  double perTick(double a_gain) const noexcept;
   void updateState() noexcept;  // m_state from the simulated device or the board's reading
 
   std::unique_ptr<const uhaptics::TauModel> m_model;  // sim and renderers keep references
@@ -138,6 +140,7 @@ class cTauDevice : public cUhapticsDevice {
   int m_quietTicks = 0;             // consecutive ticks out of contact (release hysteresis)
   uhaptics::Vec3 m_lastForce = uhaptics::Vec3::Zero();     // the application's last new force
   uhaptics::Vec3 m_lastPosition = uhaptics::Vec3::Zero();  // the position it was computed at
+  int m_framesTicks = 0;            // servo ticks since the last new force
   int m_overloadTicks = 0;          // consecutive held ticks with a saturated wall command
   double m_probeForce = 0.0;        // probe: force rise and depth along the normal since the onset
   double m_probeDepth = 0.0;
