@@ -62,14 +62,17 @@ struct FingerScene {
   }
 };
 
-// A steady contact on a resting finger: a box beside the proximal phalanx, the hand (the tool frame)
-// moved 5 mm towards it (2 mm gap), then held, as in "a box pressed on one phalanx" below.
-void pressProximalPhalanx(FingerScene& a_scene, const cExoFingerDevicePtr& a_device) {
+// A block beside one phalanx (on its dorsal side, away from the other phalanx) of the resting
+// finger, 2 mm away; its face half the phalanx long, centred on it: it covers the points at 1/3 and
+// 2/3, not the joints. Returns the phalanx's dorsal normal: the way to move the hand into the block.
+uhaptics::Vec3 addBoxBesidePhalanx(FingerScene& a_scene, const cExoFingerDevicePtr& a_device,
+                                   cExoFingerTool::cPhalanx a_phalanx) {
   const uhaptics::Vec2 x = 0.5 * (a_device->getModel().taskLower() + a_device->getModel().taskUpper());
-  const auto phalanx = cExoFingerTool::C_PHALANX_PROXIMAL;
-  const cExoFingerTool::cPhalanxPoint from{phalanx, 0.0}, to{phalanx, 1.0}, mid{phalanx, 0.5};
+  const cExoFingerTool::cPhalanxPoint from{a_phalanx, 0.0}, to{a_phalanx, 1.0}, mid{a_phalanx, 0.5};
   const uhaptics::Vec3 along = (a_scene.tool->position(to, x) - a_scene.tool->position(from, x)).normalized();
-  const uhaptics::Vec3 out = -a_scene.tool->jacobian(mid, x).col(phalanx).normalized();
+  // Dorsal normal: opposite to the way flexion of the phalanx's own joint moves it. The other
+  // phalanx lies on its palmar side (the finger is flexed), so it cannot reach the block.
+  const uhaptics::Vec3 out = -a_scene.tool->jacobian(mid, x).col(a_phalanx).normalized();
   const double length = (a_scene.tool->position(to, x) - a_scene.tool->position(from, x)).norm();
   const double gap = 0.002, thickness = 0.01;
   cMatrix3d R;
@@ -78,6 +81,13 @@ void pressProximalPhalanx(FingerScene& a_scene, const cExoFingerDevicePtr& a_dev
   R.setCol2(toChai(out));
   a_scene.addBox(toChai(a_scene.tool->position(mid, x) + (gap + kPointRadius + 0.5 * thickness) * out), R, 0.03,
                  0.5 * length, thickness);
+  return out;
+}
+
+// A steady contact on a resting finger: the box beside the proximal phalanx, the hand (the tool
+// frame) moved 5 mm towards it (2 mm gap), then held, as in "a box pressed on one phalanx" below.
+void pressProximalPhalanx(FingerScene& a_scene, const cExoFingerDevicePtr& a_device) {
+  const uhaptics::Vec3 out = addBoxBesidePhalanx(a_scene, a_device, cExoFingerTool::C_PHALANX_PROXIMAL);
   REQUIRE(a_scene.tool->start());
   const int steps = 250;
   for (int i = 0; i <= steps + 50; ++i) {
@@ -117,20 +127,7 @@ TEST_CASE("exo finger tool: a box pressed on one phalanx loads only that phalanx
       device->setLockStep(true);
       FingerScene scene(device);
       const uhaptics::Vec2 x = 0.5 * (device->getModel().taskLower() + device->getModel().taskUpper());
-      const cExoFingerTool::cPhalanxPoint from{phalanx, 0.0}, to{phalanx, 1.0}, mid{phalanx, 0.5};
-      const uhaptics::Vec3 along = (scene.tool->position(to, x) - scene.tool->position(from, x)).normalized();
-      // Dorsal normal of the phalanx: opposite to the way flexion of its own joint moves it. The
-      // other phalanx lies on its palmar side (the finger is flexed), so it cannot reach the block.
-      const uhaptics::Vec3 out = -scene.tool->jacobian(mid, x).col(phalanx).normalized();
-      const double length = (scene.tool->position(to, x) - scene.tool->position(from, x)).norm();
-      const double gap = 0.002, thickness = 0.01;
-      cMatrix3d R;
-      R.setCol0(cVector3d(1, 0, 0));
-      R.setCol1(toChai(along));
-      R.setCol2(toChai(out));
-      // Face half the phalanx long, centred on it: covers the points at 1/3 and 2/3, not the joints.
-      scene.addBox(toChai(scene.tool->position(mid, x) + (gap + kPointRadius + 0.5 * thickness) * out), R, 0.03,
-                   0.5 * length, thickness);
+      const uhaptics::Vec3 out = addBoxBesidePhalanx(scene, device, phalanx);
       REQUIRE(scene.tool->start());
       for (int i = 0; i < 10; ++i) scene.tick();
       REQUIRE(scene.tool->getFingerAngles().isApprox(x, 1e-9));
