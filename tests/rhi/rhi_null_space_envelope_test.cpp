@@ -156,8 +156,9 @@ TEST_CASE("the joint-limit brake removes dt / limit_brake_time of the excess app
   std::mt19937 rng(12);
   std::uniform_real_distribution<double> unit(0.0, 1.0);
   int checked = 0, floored = 0;
-  // The former inertia C_j M C_j^T over the one the null space shows, 1 / (C_j M^-1 P C_j^T): its
-  // brake's per-tick gain was this ratio times dt / limit_brake_time, stable below 2 (ratio 10).
+  // The whole arm's inertia C_j M C_j^T over the one the null space shows, 1 / (C_j M^-1 P C_j^T):
+  // a brake sized by the former has a per-tick gain of this ratio times dt / limit_brake_time,
+  // stable below 2 (ratio 10).
   double worst_overestimate = 0.0;
   for (int trial = 0; trial < 300; ++trial) {
     // Limited coordinates inside the bounds, farther than the margin from each (no barrier torque).
@@ -193,8 +194,9 @@ TEST_CASE("the joint-limit brake removes dt / limit_brake_time of the excess app
     }
     worst_overestimate = std::max(worst_overestimate, (row * M * row.transpose()).value() * null_mobility);
   }
-  INFO("former inertia C M C^T overestimated up to " << worst_overestimate << "x; " << floored << " capped");
+  INFO("whole-arm inertia C M C^T overestimates up to " << worst_overestimate << "x; " << floored << " capped");
   CHECK(checked > 250);
-  // The control: on this sample the former brake was unstable in discrete time somewhere.
+  // The control: on this sample a brake sized by the whole arm's inertia is unstable in discrete
+  // time somewhere, so the null-space inertia is what keeps it stable.
   CHECK(worst_overestimate > 10.0);
 }
