@@ -248,7 +248,7 @@ def write_report(results, out, table):
             "result": "pass" if not r["problems"] else "FAIL: " + "; ".join(r["problems"]),
         })
     with open(os.path.join(out, "dropin.csv"), "w", newline="") as f:
-        writer = csv.DictWriter(f, fieldnames=list(rows[0].keys()))
+        writer = csv.DictWriter(f, fieldnames=list(rows[0].keys()), lineterminator="\n")
         writer.writeheader()
         writer.writerows(rows)
     lines = ["| example | device | ticks | rate [Hz] | contacts | renderer engagement | max force [N] | "
@@ -277,7 +277,7 @@ def write_report(results, out, table):
             f.write(line + "\n")
     # One reproduction row per run, for uhaptics-report (paper column "chai3d").
     with open(os.path.join(out, "reproduction.csv"), "w", newline="") as f:
-        writer = csv.writer(f)
+        writer = csv.writer(f, lineterminator="\n")
         writer.writerow(["paper", "quantity", "published", "measured", "criterion", "pass", "unit", "needs_data"])
         for r, row in zip(results, rows):
             writer.writerow(["chai3d", f"{row['example']} with {row['device']}: {r['expect']}", "nan",

@@ -3,6 +3,7 @@
 #include <catch2/catch.hpp>
 #include <cmath>
 #include <cstdio>
+#include <fstream>
 
 using uhaptics::tools::ReproductionTable;
 
@@ -50,4 +51,18 @@ TEST_CASE("rows that need unpublished data are shown with their reason and do no
   t.addWithin("003", "zeta", 3.3, 3.9, 0.05, "-");
   CHECK_FALSE(t.allPass());
   CHECK_THROWS(ReproductionTable().markNeedsData("why"));
+}
+
+TEST_CASE("reproduction tables read files with CRLF line ends (Python's csv module writes them)") {
+  const std::string path = "reproduction_crlf_test.csv";
+  {
+    std::ofstream out(path, std::ios::binary);
+    out << "paper,quantity,published,measured,criterion,pass,unit,needs_data\r\n"
+        << "chai3d,run,nan,5,rule,FAIL,ticks,\r\n";
+  }
+  const auto t = ReproductionTable::readCsv(path);
+  std::remove(path.c_str());
+  REQUIRE(t.rows().size() == 1);
+  CHECK(t.rows()[0].needs_data.empty());
+  CHECK(t.rows()[0].fails());
 }

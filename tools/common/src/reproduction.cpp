@@ -87,6 +87,7 @@ ReproductionTable ReproductionTable::readCsv(const std::string& path) {
   std::getline(in, line);
   ReproductionTable t;
   while (std::getline(in, line)) {
+    if (!line.empty() && line.back() == '\r') line.pop_back();  // a file written with CRLF line ends
     if (line.empty()) continue;
     const auto c = splitCsvLine(line);
     if (c.size() != 7 && c.size() != 8) throw std::runtime_error(path + ": malformed row: " + line);
