@@ -1,6 +1,8 @@
 #include "scene_app.hpp"
 
 #include <GLFW/glfw3.h>
+#include <dlfcn.h>
+#include <link.h>
 
 #include <atomic>
 #include <cmath>
@@ -30,6 +32,21 @@ class OwnedViewport : public chai3d::cViewport {
   using chai3d::cViewport::cViewport;
   ~OwnedViewport() override { m_cameraViewport->m_frontLayer->removeChild(m_viewPanel); }
 };
+
+// Keeps every shared library loaded so far (the GL driver the new context pulled in with dlopen:
+// Mesa's GLX vendor library, its DRI driver) loaded until the process exits. glfwTerminate()
+// otherwise unloads the driver while allocations it keeps through its own globals are still live,
+// and an exit-time leak check (LeakSanitizer) then reports them as leaks of an unknown module.
+void pinLoadedLibraries() {
+  dl_iterate_phdr(
+      [](dl_phdr_info* a_info, std::size_t, void*) {
+        if (a_info->dlpi_name != nullptr && a_info->dlpi_name[0] != '\0') {
+          dlopen(a_info->dlpi_name, RTLD_LAZY | RTLD_NOLOAD | RTLD_NODELETE);  // marks it never to unload
+        }
+        return 0;
+      },
+      nullptr);
+}
 
 }  // namespace
 
@@ -83,6 +100,7 @@ SceneApp::SceneApp(const std::string& a_title, const SceneOptions& a_options, in
     throw Error("GLEW cannot initialize the OpenGL context");
   }
 #endif
+  pinLoadedLibraries();
   m_world = new chai3d::cWorld();
   m_world->m_backgroundColor.setWhite();
   m_camera = new chai3d::cCamera(m_world);
