@@ -54,6 +54,12 @@ struct FingerScene {
     box->m_material->setStiffness(stiffness);
     return box;
   }
+
+  // A stiff block under the workspace centre (r: the device's workspace radius): during flexion the
+  // middle phalanx and the fingertip dip into it.
+  cMesh* addBlockUnderCentre(double r, bool brute_force = false) {
+    return addBox(cVector3d(0, 0, -1.2 * r), cIdentity3d(), 4 * r, 4 * r, 2 * r, brute_force);
+  }
   void tick() {
     world.computeGlobalPositions(true);
     tool->updateFromDevice();
@@ -178,9 +184,7 @@ TEST_CASE("exo finger tool: pressing into a block and releasing is passive", "[c
   auto device = cExoFingerDevice::create(exoSelection(true));
   device->setLockStep(true);
   FingerScene scene(device);
-  const double r = device->getSpecifications().m_workspaceRadius;
-  // A stiff block under the workspace centre: during flexion the middle phalanx and the fingertip dip into it.
-  scene.addBox(cVector3d(0, 0, -1.2 * r), cIdentity3d(), 4 * r, 4 * r, 2 * r);
+  scene.addBlockUnderCentre(device->getSpecifications().m_workspaceRadius);
   REQUIRE(scene.tool->start());
   uhaptics::PassivityObserver<2> port;
   double stored = 0.0, peak_torque = 0.0;
@@ -268,8 +272,7 @@ TEST_CASE("exo finger tool: the device's renderer figures count the tool's conta
   auto device = cExoFingerDevice::create(exoSelection(true));
   device->setLockStep(true);
   FingerScene scene(device);
-  const double r = device->getSpecifications().m_workspaceRadius;
-  scene.addBox(cVector3d(0, 0, -1.2 * r), cIdentity3d(), 4 * r, 4 * r, 2 * r);
+  scene.addBlockUnderCentre(device->getSpecifications().m_workspaceRadius);
   REQUIRE(scene.tool->start());
   std::uint64_t torque_frames = 0;
   for (int i = 0; i < 2000; ++i) {  // one lap: the finger dips into the block
@@ -296,8 +299,7 @@ TEST_CASE("exo finger tool: a haptic frame allocates nothing", "[chai3d_adapters
   auto device = cExoFingerDevice::create(exoSelection(true));
   device->setLockStep(true);
   FingerScene scene(device);
-  const double r = device->getSpecifications().m_workspaceRadius;
-  scene.addBox(cVector3d(0, 0, -1.2 * r), cIdentity3d(), 4 * r, 4 * r, 2 * r, true);
+  scene.addBlockUnderCentre(device->getSpecifications().m_workspaceRadius, true);
   REQUIRE(scene.tool->start());
   for (int i = 0; i < 2000; ++i) scene.tick();  // one full lap: every contact configuration seen once
   uhaptics::tools::AllocationScope scope;
