@@ -241,6 +241,7 @@ def write_report(results, out, table):
             "ticks": s.get("ticks", ""), "rate_hz": round(s.get("rate_hz", 0.0), 1) if s else "",
             "contacts": s.get("contacts", ""), "contact_ticks": s.get("contact_ticks", ""),
             "peak_force_N": s.get("peak_force_N", ""), "peak_output": s.get("peak_output", ""),
+            "max_entry_depth_mm": s.get("renderer_figures", {}).get("max_entry_depth_mm", ""),
             "max_penetration_mm": s.get("renderer_figures", {}).get("max_penetration_mm", ""),
             "renderer": s.get("renderer", ""), "figures": describe(r),
             "screenshot": os.path.basename(r["shot"]) if r.get("shot") else "",

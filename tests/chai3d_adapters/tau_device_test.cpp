@@ -412,7 +412,7 @@ TEST_CASE("tau: the renderer figures are declared by name", "[chai3d_adapters][t
     REQUIRE(stats.figure(name) != nullptr);
     CHECK(stats.figure(name)->kind == Kind::kCount);
   }
-  for (const char* name : {"max_penetration_mm", "soft_stiffness_max_N_per_m"}) {
+  for (const char* name : {"max_entry_depth_mm", "max_penetration_mm", "soft_stiffness_max_N_per_m"}) {
     INFO(name);
     REQUIRE(stats.figure(name) != nullptr);
     CHECK(stats.figure(name)->kind == Kind::kMaximum);

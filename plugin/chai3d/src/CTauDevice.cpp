@@ -1,5 +1,6 @@
 #include "uhaptics/chai3d/CTauDevice.hpp"
 
+#include <algorithm>
 #include <cmath>
 
 #include "uhaptics/core/limits.hpp"
@@ -99,6 +100,7 @@ cTauDevice::cTauDevice(unsigned int a_deviceNumber, const uhaptics::DeviceSelect
   m_figEngagements = stats.declareFigure("lqr_engagements", Kind::kCount);
   m_figReleases = stats.declareFigure("lqr_releases", Kind::kCount);
   m_figHeldTicks = stats.declareFigure("lqr_held_ticks", Kind::kCount);
+  m_figEntryDepth = stats.declareFigure("max_entry_depth_mm", Kind::kMaximum);
   m_figMaxPenetration = stats.declareFigure("max_penetration_mm", Kind::kMaximum);
   m_figSaturatedTicks = stats.declareFigure("lqr_saturated_ticks", Kind::kCount);
   m_figSpringTicks = stats.declareFigure("spring_contact_ticks", Kind::kCount);
@@ -379,13 +381,19 @@ uhaptics::Fault cTauDevice::servoTick(const ServoInput& a_input, double& a_outpu
     const uhaptics::WallCommand& wall = m_lqr->tick(m_q, m_surface, &m_data->pose, &m_tau);
     fault = wall.fault;
     m_tau = wall.torque;
+    const bool was_held = m_held;
     m_held = m_contact == Contact::kLqr && wall.in_contact;
     m_lqrEngaged = m_explicitSurface ? m_held : m_contact == Contact::kLqr;
     m_overloadTicks = m_held && wall.saturated ? m_overloadTicks + 1 : 0;
     if (m_held) {
       uhaptics::SessionStats& stats = sessionStats();
       stats.count(m_figHeldTicks);
-      stats.observeMaximum(m_figMaxPenetration, wall.penetration * 1e3);
+      if (!was_held) {
+        m_entryDepth = wall.penetration;
+        stats.observeMaximum(m_figEntryDepth, wall.penetration * 1e3);
+      }
+      if (wall.penetration <= kSettledDepth) m_entryDepth = 0.0;
+      stats.observeMaximum(m_figMaxPenetration, std::max(0.0, wall.penetration - m_entryDepth) * 1e3);
       if (wall.saturated) stats.count(m_figSaturatedTicks);
       if (!m_explicitSurface) {
         // The application's force across the wall's normal (a second face of a concave edge or

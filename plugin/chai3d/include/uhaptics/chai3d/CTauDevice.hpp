@@ -50,9 +50,12 @@
 //   contact: the spring takes it over ("lqr_overloads").
 //
 //   Renderer figures (session statistics, counts unless noted): lqr_engagements, lqr_releases,
-//   lqr_held_ticks (servo ticks held by the wall), max_penetration_mm (maximum: deepest below the
-//   wall's plane while held; the plane itself is kHoldForce / k, 0.1 mm at 4800 N/m, below the
-//   application's surface), lqr_saturated_ticks (held ticks whose wall command hit a torque
+//   lqr_held_ticks (servo ticks held by the wall), max_entry_depth_mm (maximum: how deep below the
+//   wall's plane the tool already was when the wall took it over, reached under the spring while
+//   the probe measured the stiffness), max_penetration_mm (maximum: the depth the wall let the
+//   tool sink, paper 001's < 1 mm: beyond the entry depth until the wall has brought the tool back
+//   within kSettledDepth of its plane, then the whole depth; the plane itself is kHoldForce / k,
+//   0.1 mm at 4800 N/m, below the application's surface), lqr_saturated_ticks (held ticks whose wall command hit a torque
 //   limit), spring_contact_ticks (ticks with a force of at least half contact_force rendered by the
 //   spring), soft_surface_contacts, soft_stiffness_max_N_per_m (maximum), lqr_overloads.
 // Simulated backend: SimulatedTau (lumped dynamics, quantized encoders, torque saturation) with the
@@ -137,6 +140,11 @@ class cTauDevice : public cUhapticsDevice {
   // Contact read from the force (model frame). m_held: the wall held the tool on the last tick.
   Contact m_contact = Contact::kFree;
   bool m_held = false;
+  // Depth below the plane the wall inherited when it took the tool over, not charged to it as
+  // penetration; zero once the tool is within kSettledDepth of the plane (a quarter of paper 001's
+  // 1 mm, above the 0-0.3 mm the held tool shows with encoder noise).
+  double m_entryDepth = 0.0;
+  static constexpr double kSettledDepth = 0.25e-3;
   int m_quietTicks = 0;             // consecutive ticks out of contact (release hysteresis)
   uhaptics::Vec3 m_lastForce = uhaptics::Vec3::Zero();     // the application's last new force
   uhaptics::Vec3 m_lastPosition = uhaptics::Vec3::Zero();  // the position it was computed at
@@ -154,7 +162,7 @@ class cTauDevice : public cUhapticsDevice {
   int m_trailCount = 0;
   uhaptics::SurfaceContact m_surface;
   // Renderer figure ids (session statistics).
-  int m_figEngagements, m_figReleases, m_figHeldTicks, m_figMaxPenetration, m_figSaturatedTicks,
+  int m_figEngagements, m_figReleases, m_figHeldTicks, m_figEntryDepth, m_figMaxPenetration, m_figSaturatedTicks,
       m_figSpringTicks, m_figSoftContacts, m_figSoftStiffness, m_figOverloads;
   uhaptics::Vec6 m_tau = uhaptics::Vec6::Zero();
   uhaptics::Vec6 m_q = uhaptics::Vec6::Zero();   // the latest joint reading
