@@ -5,7 +5,7 @@
 #include <map>
 #include <string>
 
-#include "uhaptics/backends/device_selection.hpp"
+#include "uhaptics/chai3d/device_selection.hpp"
 #include "uhaptics/core/fault.hpp"
 
 using uhaptics::readDeviceSelection;

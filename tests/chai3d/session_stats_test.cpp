@@ -5,7 +5,7 @@
 #include <fstream>
 #include <sstream>
 
-#include "uhaptics/backends/session_stats.hpp"
+#include "uhaptics/chai3d/session_stats.hpp"
 #include "uhaptics/core/fault.hpp"
 #include "uhaptics/tools/alloc_probe.hpp"
 

@@ -4,7 +4,7 @@
 #include <cstdio>
 #include <string>
 
-#include "uhaptics/core/wire_protocol.hpp"
+#include "uhaptics/protocol/wire_protocol.hpp"
 
 using namespace uhaptics::wire;
 

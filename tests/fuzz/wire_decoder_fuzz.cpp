@@ -9,7 +9,7 @@
 #include <cstdlib>
 #include <cstring>
 
-#include "uhaptics/core/wire_protocol.hpp"
+#include "uhaptics/protocol/wire_protocol.hpp"
 
 namespace {
 void check(const std::uint8_t* data, std::size_t size) {

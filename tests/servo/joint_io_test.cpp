@@ -12,7 +12,7 @@
 
 #include "servo_rig.hpp"
 #include "uhaptics/backends/joint_io.hpp"
-#include "uhaptics/backends/libusb_transport.hpp"
+#include "uhaptics/protocol/libusb_transport.hpp"
 #include "uhaptics/core/fault.hpp"
 
 using namespace uhaptics;

@@ -10,7 +10,7 @@
 #include <sstream>
 
 #include "uhaptics/backends/board_catalog.hpp"
-#include "uhaptics/backends/libusb_transport.hpp"
+#include "uhaptics/protocol/libusb_transport.hpp"
 #include "uhaptics/core/fault.hpp"
 #include "uhaptics/models/param_file.hpp"
 

@@ -8,7 +8,7 @@
 #include <array>
 #include <vector>
 
-#include "uhaptics/core/wire_protocol.hpp"
+#include "uhaptics/protocol/wire_protocol.hpp"
 #include "uhaptics/tools/alloc_probe.hpp"
 
 using namespace uhaptics::wire;

@@ -29,7 +29,7 @@
 #include "uhaptics/backends/board_catalog.hpp"
 #include "uhaptics/backends/board_emulator.hpp"
 #include "uhaptics/backends/device_plants.hpp"
-#include "uhaptics/backends/libusb_transport.hpp"
+#include "uhaptics/protocol/libusb_transport.hpp"
 #include "uhaptics/backends/servo_loop.hpp"
 #include "uhaptics/core/fault.hpp"
 #include "uhaptics/tools/csv.hpp"

@@ -6,7 +6,7 @@
 
 #include "uhaptics/backends/board_emulator.hpp"
 #include "uhaptics/backends/device_plants.hpp"
-#include "uhaptics/backends/libusb_transport.hpp"
+#include "uhaptics/protocol/libusb_transport.hpp"
 #include "uhaptics/core/fault.hpp"
 
 namespace uhaptics {

@@ -8,7 +8,7 @@
 #include <cstdint>
 #include <string>
 
-#include "uhaptics/backends/device_descriptor.hpp"
+#include "uhaptics/protocol/device_descriptor.hpp"
 
 namespace uhaptics {
 

@@ -20,8 +20,8 @@
 #include <mutex>
 
 #include "uhaptics/backends/board_plant.hpp"
-#include "uhaptics/backends/transport.hpp"
-#include "uhaptics/core/wire_protocol.hpp"
+#include "uhaptics/protocol/transport.hpp"
+#include "uhaptics/protocol/wire_protocol.hpp"
 
 namespace uhaptics {
 

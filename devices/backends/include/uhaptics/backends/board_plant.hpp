@@ -7,7 +7,7 @@
 // All methods are called from one thread (the emulator's), never allocate and never throw.
 #include <array>
 
-#include "uhaptics/core/wire_protocol.hpp"
+#include "uhaptics/protocol/wire_protocol.hpp"
 
 namespace uhaptics {
 

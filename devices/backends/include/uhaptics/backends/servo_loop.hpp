@@ -22,11 +22,11 @@
 #include <string>
 #include <thread>
 
-#include "uhaptics/backends/device_descriptor.hpp"
+#include "uhaptics/protocol/device_descriptor.hpp"
 #include "uhaptics/backends/lockfree.hpp"
 #include "uhaptics/backends/servo_timing.hpp"
-#include "uhaptics/backends/transport.hpp"
-#include "uhaptics/core/wire_protocol.hpp"
+#include "uhaptics/protocol/transport.hpp"
+#include "uhaptics/protocol/wire_protocol.hpp"
 
 namespace uhaptics {
 

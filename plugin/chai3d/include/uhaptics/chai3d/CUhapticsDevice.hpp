@@ -34,10 +34,10 @@
 #include "system/CGlobals.h"  // must precede device headers (CHAI3D's feature switches)
 #include "devices/CGenericHapticDevice.h"
 
-#include "uhaptics/backends/device_selection.hpp"
+#include "uhaptics/chai3d/device_selection.hpp"
 #include "uhaptics/backends/joint_io.hpp"
 #include "uhaptics/backends/scripted_hand.hpp"
-#include "uhaptics/backends/session_stats.hpp"
+#include "uhaptics/chai3d/session_stats.hpp"
 #include "uhaptics/core/fault.hpp"
 #include "uhaptics/core/types.hpp"
 

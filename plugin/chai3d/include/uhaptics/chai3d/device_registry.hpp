@@ -4,7 +4,7 @@
 #include <string>
 #include <vector>
 
-#include "uhaptics/backends/device_selection.hpp"
+#include "uhaptics/chai3d/device_selection.hpp"
 #include "uhaptics/chai3d/CUhapticsDevice.hpp"
 
 namespace uhaptics::adapter {

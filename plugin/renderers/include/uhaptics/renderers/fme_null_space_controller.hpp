@@ -250,7 +250,7 @@ class FmeNullSpaceController {
       // the free one runs: that starts when the force has fallen (V >= eps2), and as it vanishes
       // (a proxy leaving a surface) its direction is undefined and can turn through 180 deg within
       // a few ticks, which swept the desired ellipsoid round and stepped the null-space torque by
-      // up to 6.9 N m per tick (CHAI3D cursor released from a mesh, tests/chai3d_adapters).
+      // up to 6.9 N m per tick (CHAI3D cursor released from a mesh, tests/chai3d).
       const bool leaving_stiff = transition_.target() == 1.0 && transition_.inProgress();
       if (contact && !leaving_stiff) {
         followContactDirection(t, F);

@@ -70,7 +70,7 @@ void checkLink(const Run& run) {
 }  // namespace
 
 TEST_CASE("board backend: TAU on the emulated board moves by F / k_h against paper 001's hand",
-          "[chai3d_adapters][board]") {
+          "[chai3d][board]") {
   auto device = cTauDevice::create(boardSelection("tau", "emulated"));
   CHECK_THAT(device->getSpecifications().m_modelName, Catch::Contains("emulated"));
   const double force = 0.5;  // N along +y: 12.5 mm at k_h = 40 N/m
@@ -89,7 +89,7 @@ TEST_CASE("board backend: TAU on the emulated board moves by F / k_h against pap
 }
 
 TEST_CASE("board backend: RHI on the emulated board moves by F / k against the grip, null space running",
-          "[chai3d_adapters][board]") {
+          "[chai3d][board]") {
   auto device = cRedundantPlanarDevice::create(boardSelection("rhi", "emulated"));
   const double force = 2.0;  // N along device -z (paper 003's palpation direction u): 2.5 mm at 800 N/m
   const Run run = holdForce(device, cVector3d(0, 0, -force), 2.0);
@@ -104,7 +104,7 @@ TEST_CASE("board backend: RHI on the emulated board moves by F / k against the g
 }
 
 TEST_CASE("board backend: finger exoskeleton on the emulated board, the finger moving by itself",
-          "[chai3d_adapters][board]") {
+          "[chai3d][board]") {
   auto device = cExoFingerDevice::create(boardSelection("exo", "emulated"));
   double largest_actuator = 0.0;
   REQUIRE(device->open());
@@ -135,7 +135,7 @@ TEST_CASE("board backend: finger exoskeleton on the emulated board, the finger m
 }
 
 TEST_CASE("board backend: usb without a board fails to open, says what was found, runs nothing",
-          "[chai3d_adapters][board]") {
+          "[chai3d][board]") {
   for (const char* name : {"exo", "tau", "rhi"}) {
     INFO(name);
     const uhaptics::DeviceSelection s = boardSelection(name, "usb");

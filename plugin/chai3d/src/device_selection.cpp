@@ -1,4 +1,4 @@
-#include "uhaptics/backends/device_selection.hpp"
+#include "uhaptics/chai3d/device_selection.hpp"
 
 #include <algorithm>
 

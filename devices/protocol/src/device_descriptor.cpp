@@ -1,4 +1,4 @@
-#include "uhaptics/backends/device_descriptor.hpp"
+#include "uhaptics/protocol/device_descriptor.hpp"
 
 #include <cmath>
 

@@ -30,7 +30,7 @@ struct Scene : ToolScene {
 
 }  // namespace
 
-TEST_CASE("exo: specification complete and consistent with the model", "[chai3d_adapters][exo]") {
+TEST_CASE("exo: specification complete and consistent with the model", "[chai3d][exo]") {
   auto device = cExoFingerDevice::create(exoSelection(true));
   const cHapticDeviceInfo info = device->getSpecifications();
   CHECK(info.m_model == C_HAPTIC_DEVICE_CUSTOM);
@@ -54,7 +54,7 @@ TEST_CASE("exo: specification complete and consistent with the model", "[chai3d_
   CHECK(info.m_rightHand);
 }
 
-TEST_CASE("exo: the finger moves in the device's y-z plane and joint angles are reported", "[chai3d_adapters][exo]") {
+TEST_CASE("exo: the finger moves in the device's y-z plane and joint angles are reported", "[chai3d][exo]") {
   auto device = cExoFingerDevice::create(exoSelection(true));
   device->setLockStep(true);
   REQUIRE(device->open());
@@ -78,7 +78,7 @@ TEST_CASE("exo: the finger moves in the device's y-z plane and joint angles are 
   CHECK(q[0] <= model.jointUpper()(0) + 1e-9);
 }
 
-TEST_CASE("exo: free space renders exactly zero force", "[chai3d_adapters][exo]") {
+TEST_CASE("exo: free space renders exactly zero force", "[chai3d][exo]") {
   auto device = cExoFingerDevice::create(exoSelection(true));
   device->setLockStep(true);
   Scene scene(device, false);
@@ -91,7 +91,7 @@ TEST_CASE("exo: free space renders exactly zero force", "[chai3d_adapters][exo]"
 }
 
 TEST_CASE("exo: a stock cToolCursor touching a block renders through the subspace proxy, passively",
-          "[chai3d_adapters][exo]") {
+          "[chai3d][exo]") {
   for (const bool lag : {false, true}) {
     DYNAMIC_SECTION("force loop lag " << lag) {
       auto device = cExoFingerDevice::create(exoSelection(lag));
@@ -131,7 +131,7 @@ TEST_CASE("exo: a stock cToolCursor touching a block renders through the subspac
 }
 
 TEST_CASE("exo: renderer figures: proxy solves, contact ticks, proxy distance and actuator force",
-          "[chai3d_adapters][exo]") {
+          "[chai3d][exo]") {
   for (const bool with_block : {false, true}) {
     DYNAMIC_SECTION((with_block ? "touching a block" : "free space")) {
       auto device = cExoFingerDevice::create(exoSelection(false));
@@ -201,7 +201,7 @@ TEST_CASE("exo: renderer figures: proxy solves, contact ticks, proxy distance an
   }
 }
 
-TEST_CASE("exo: a servo tick allocates nothing", "[chai3d_adapters][exo]") {
+TEST_CASE("exo: a servo tick allocates nothing", "[chai3d][exo]") {
   auto device = cExoFingerDevice::create(exoSelection(true));
   device->setLockStep(true);
   Scene scene(device, true);

@@ -59,7 +59,7 @@ uhaptics::DeviceSelection selection(const std::string& a_device) {
 }  // namespace
 
 TEST_CASE("slot: without a usable selection the handler's device is unavailable, with a complete specification",
-          "[chai3d_adapters][slot]") {
+          "[chai3d][slot]") {
   struct Case {
     const char* label;
     Environment environment;
@@ -123,7 +123,7 @@ TEST_CASE("slot: without a usable selection the handler's device is unavailable,
   }
 }
 
-TEST_CASE("slot: a valid selection from the environment gives that device", "[chai3d_adapters][slot]") {
+TEST_CASE("slot: a valid selection from the environment gives that device", "[chai3d][slot]") {
   SelectionEnvironment environment(Environment{{"UHAPTICS_DEVICE", "rhi"}});
   cHapticDeviceHandler handler;
   REQUIRE(handler.getNumDevices() == 1u);
@@ -134,7 +134,7 @@ TEST_CASE("slot: a valid selection from the environment gives that device", "[ch
   CHECK_THAT(device->getSpecifications().m_modelName, Catch::Contains("(uhaptics, sim)"));
 }
 
-TEST_CASE("slot: the handler's device reaches the uhaptics device behind it", "[chai3d_adapters][slot]") {
+TEST_CASE("slot: the handler's device reaches the uhaptics device behind it", "[chai3d][slot]") {
   SECTION("devices that are not the slot's") {
     CHECK(uhaptics::adapter::uhapticsDevice(nullptr) == nullptr);
     CHECK(uhaptics::adapter::uhapticsDevice(cGenericHapticDevice::create()) == nullptr);
@@ -178,7 +178,7 @@ TEST_CASE("slot: the handler's device reaches the uhaptics device behind it", "[
   }
 }
 
-TEST_CASE("slot: the device-specific functions work on the handler's device", "[chai3d_adapters][slot]") {
+TEST_CASE("slot: the device-specific functions work on the handler's device", "[chai3d][slot]") {
   SelectionEnvironment environment(Environment{});
   SECTION("exo: cExoFingerTool on the exoskeleton behind the handler's device") {
     uhaptics::adapter::selectSlotDevice(selection("exo"));

@@ -60,7 +60,7 @@ Result pushIntoBlock(cTauDevice::cWallMode mode, double stiffness) {
 
 }  // namespace
 
-TEST_CASE("tau: specification complete and consistent with the model", "[chai3d_adapters][tau]") {
+TEST_CASE("tau: specification complete and consistent with the model", "[chai3d][tau]") {
   auto device = cTauDevice::create(tauSelection(cTauDevice::C_TAU_WALL_AUTO));
   const cHapticDeviceInfo info = device->getSpecifications();
   CHECK(info.m_model == C_HAPTIC_DEVICE_CUSTOM);
@@ -86,7 +86,7 @@ TEST_CASE("tau: specification complete and consistent with the model", "[chai3d_
   CHECK(device->getJointAnglesRad(q));
 }
 
-TEST_CASE("tau: free space holds gravity, forces flow through J^T", "[chai3d_adapters][tau]") {
+TEST_CASE("tau: free space holds gravity, forces flow through J^T", "[chai3d][tau]") {
   auto selection = tauSelection(cTauDevice::C_TAU_WALL_SPRING);
   selection.hand_enabled = false;
   auto device = cTauDevice::create(selection);
@@ -108,7 +108,7 @@ TEST_CASE("tau: free space holds gravity, forces flow through J^T", "[chai3d_ada
 }
 
 TEST_CASE("tau: the LQR wall holds a 12 N push against a rigid mesh under 1 mm, the spring does not",
-          "[chai3d_adapters][tau]") {
+          "[chai3d][tau]") {
   const Result lqr = pushIntoBlock(cTauDevice::C_TAU_WALL_AUTO, 6000.0);
   CHECK(lqr.lqr_engaged);
   CHECK(lqr.contacts >= 1);
@@ -120,13 +120,13 @@ TEST_CASE("tau: the LQR wall holds a 12 N push against a rigid mesh under 1 mm, 
   CHECK(spring.max_penetration > 1.5e-3);
 }
 
-TEST_CASE("tau: a soft object stays with the spring (no LQR wall)", "[chai3d_adapters][tau]") {
+TEST_CASE("tau: a soft object stays with the spring (no LQR wall)", "[chai3d][tau]") {
   const Result soft = pushIntoBlock(cTauDevice::C_TAU_WALL_AUTO, 500.0);  // below the 3000 N/m threshold
   CHECK(soft.contacts >= 1);
   CHECK_FALSE(soft.lqr_engaged);
 }
 
-TEST_CASE("tau: a servo tick allocates nothing", "[chai3d_adapters][tau]") {
+TEST_CASE("tau: a servo tick allocates nothing", "[chai3d][tau]") {
   auto device = cTauDevice::create(tauSelection(cTauDevice::C_TAU_WALL_LQR));
   device->setLockStep(true);
   REQUIRE(device->open());
@@ -231,7 +231,7 @@ Slide slideOverSphere(bool shape) {
 
 }  // namespace
 
-TEST_CASE("tau: the LQR wall follows a rigid sphere the tool slides over", "[chai3d_adapters][tau]") {
+TEST_CASE("tau: the LQR wall follows a rigid sphere the tool slides over", "[chai3d][tau]") {
   for (const bool shape : {true, false}) {
     const Slide slide = slideOverSphere(shape);
     INFO((shape ? "cShapeSphere" : "mesh sphere") << ": depth " << slide.max_depth * 1e3 << " mm, normal off by "
@@ -296,7 +296,7 @@ Groove pushIntoGroove(cTauDevice::cWallMode mode) {
 
 }  // namespace
 
-TEST_CASE("tau: a concave groove pushed into is held on both faces", "[chai3d_adapters][tau]") {
+TEST_CASE("tau: a concave groove pushed into is held on both faces", "[chai3d][tau]") {
   const Groove lqr = pushIntoGroove(cTauDevice::C_TAU_WALL_AUTO);
   const Groove spring = pushIntoGroove(cTauDevice::C_TAU_WALL_SPRING);
   if (reporting()) WARN("12 N into a 90 deg groove: depth LQR " << lqr.max_depth * 1e3 << " mm, spring " << spring.max_depth * 1e3 << " mm");
@@ -309,7 +309,7 @@ TEST_CASE("tau: a concave groove pushed into is held on both faces", "[chai3d_ad
   CHECK(spring.max_depth > 2.0 * lqr.max_depth);
 }
 
-TEST_CASE("tau: friction does not tilt the wall's normal", "[chai3d_adapters][tau]") {
+TEST_CASE("tau: friction does not tilt the wall's normal", "[chai3d][tau]") {
   // A rigid block with Coulomb friction (static 0.5, dynamic 0.4: a slipping finger proxy tilts its
   // force 22 deg off the normal, a stuck one up to 27 deg). The hand comes straight down, presses
   // with up to 8 N, slides 25 mm across, lifts and returns through the air.
@@ -347,7 +347,7 @@ TEST_CASE("tau: friction does not tilt the wall's normal", "[chai3d_adapters][ta
 }
 
 TEST_CASE("tau: a steady push is one engagement, held throughout, within the torque limits",
-          "[chai3d_adapters][tau]") {
+          "[chai3d][tau]") {
   // The block push's hand, but its anchor keeps going down for 4 s: one steady 12 N push.
   auto selection = tauSelection(cTauDevice::C_TAU_WALL_AUTO);
   selection.hand.lap_time = 8.0;
@@ -380,7 +380,7 @@ TEST_CASE("tau: a steady push is one engagement, held throughout, within the tor
 }
 
 TEST_CASE("tau: a surface below the stiffness threshold stays with the spring and is reported soft",
-          "[chai3d_adapters][tau]") {
+          "[chai3d][tau]") {
   // 04-shapes' spheres: 0.4 of the device's maxLinearStiffness, 2400 N/m at the device.
   auto device = cTauDevice::create(tauSelection(cTauDevice::C_TAU_WALL_AUTO));
   device->setLockStep(true);
@@ -402,7 +402,7 @@ TEST_CASE("tau: a surface below the stiffness threshold stays with the spring an
   CHECK(measured == Approx(2400.0).epsilon(0.1));
 }
 
-TEST_CASE("tau: the renderer figures are declared by name", "[chai3d_adapters][tau]") {
+TEST_CASE("tau: the renderer figures are declared by name", "[chai3d][tau]") {
   auto device = cTauDevice::create(tauSelection(cTauDevice::C_TAU_WALL_AUTO));
   const uhaptics::SessionStatsSnapshot stats = device->getSessionStats();
   using Kind = uhaptics::RendererFigure::Kind;

@@ -15,7 +15,7 @@ uhaptics::Vec3 toEigen(const cVector3d& v) { return uhaptics::Vec3(v.x(), v.y(),
 
 }  // namespace
 
-TEST_CASE("registry devices: specification complete and consistent", "[chai3d_adapters][contract]") {
+TEST_CASE("registry devices: specification complete and consistent", "[chai3d][contract]") {
   for (const std::string& name : uhaptics::adapter::deviceNames()) {
     DYNAMIC_SECTION(name) {
       uhaptics::DeviceSelection selection;
@@ -168,7 +168,7 @@ void checkContract(const std::string& a_name, const cGenericHapticDevicePtr& a_g
 
 }  // namespace
 
-TEST_CASE("registry devices: the CHAI3D device contract", "[chai3d_adapters][contract]") {
+TEST_CASE("registry devices: the CHAI3D device contract", "[chai3d][contract]") {
   for (const std::string& name : uhaptics::adapter::deviceNames()) {
     DYNAMIC_SECTION(name) {
       uhaptics::DeviceSelection selection;
@@ -181,7 +181,7 @@ TEST_CASE("registry devices: the CHAI3D device contract", "[chai3d_adapters][con
 }
 
 TEST_CASE("registry devices: the CHAI3D device contract through CHAI3D's handler (the uhaptics slot)",
-          "[chai3d_adapters][contract][slot]") {
+          "[chai3d][contract][slot]") {
   for (const std::string& name : uhaptics::adapter::deviceNames()) {
     DYNAMIC_SECTION(name) {
       uhaptics::DeviceSelection selection;

@@ -1,4 +1,4 @@
-#include "uhaptics/core/wire_protocol.hpp"
+#include "uhaptics/protocol/wire_protocol.hpp"
 
 #include <cmath>
 #include <cstring>

@@ -24,7 +24,7 @@ uhaptics::DeviceSelection fixtureSelection() {
 
 }  // namespace
 
-TEST_CASE("device contract before and after open", "[chai3d_adapters][device]") {
+TEST_CASE("device contract before and after open", "[chai3d][device]") {
   auto device = std::make_shared<PointMassDevice>(fixtureSelection());
   cGenericHapticDevicePtr generic = device;
   CHECK(device->isDeviceAvailable());
@@ -53,7 +53,7 @@ TEST_CASE("device contract before and after open", "[chai3d_adapters][device]") 
   CHECK_FALSE(device->isDeviceReady());
 }
 
-TEST_CASE("forces flow: in lock-step each command is one servo tick of the device", "[chai3d_adapters][device]") {
+TEST_CASE("forces flow: in lock-step each command is one servo tick of the device", "[chai3d][device]") {
   auto selection = fixtureSelection();
   selection.hand_enabled = false;
   PointMassDevice device(selection);
@@ -75,7 +75,7 @@ TEST_CASE("forces flow: in lock-step each command is one servo tick of the devic
   CHECK(stats.peak_force == 1.0);
 }
 
-TEST_CASE("non-finite commands are refused with a fault and a zero command", "[chai3d_adapters][device]") {
+TEST_CASE("non-finite commands are refused with a fault and a zero command", "[chai3d][device]") {
   auto selection = fixtureSelection();
   selection.hand_enabled = false;
   PointMassDevice device(selection);
@@ -90,7 +90,7 @@ TEST_CASE("non-finite commands are refused with a fault and a zero command", "[c
   CHECK(device.position_.allFinite());
 }
 
-TEST_CASE("a servo tick through the CHAI3D call allocates nothing", "[chai3d_adapters][device]") {
+TEST_CASE("a servo tick through the CHAI3D call allocates nothing", "[chai3d][device]") {
   PointMassDevice device(fixtureSelection());
   device.setLockStep(true);
   REQUIRE(device.open());
@@ -104,7 +104,7 @@ TEST_CASE("a servo tick through the CHAI3D call allocates nothing", "[chai3d_ada
   CHECK(scope.count() == 0);
 }
 
-TEST_CASE("real-time mode: servo ticks follow the wall clock, not the call rate", "[chai3d_adapters][device]") {
+TEST_CASE("real-time mode: servo ticks follow the wall clock, not the call rate", "[chai3d][device]") {
   PointMassDevice device(fixtureSelection());
   REQUIRE(device.open());
   const auto start = std::chrono::steady_clock::now();
@@ -122,7 +122,7 @@ TEST_CASE("real-time mode: servo ticks follow the wall clock, not the call rate"
   CHECK(calls > stats.ticks);  // the application loop spins faster than the servo: commands held
 }
 
-TEST_CASE("the scripted hand moves the device along its path", "[chai3d_adapters][hand]") {
+TEST_CASE("the scripted hand moves the device along its path", "[chai3d][hand]") {
   auto selection = fixtureSelection();
   selection.hand.waypoints = {uhaptics::Vec3(0, 0, 0.5), uhaptics::Vec3(0, 0, -0.5)};
   selection.hand.lap_time = 2.0;
@@ -146,7 +146,7 @@ TEST_CASE("the scripted hand moves the device along its path", "[chai3d_adapters
   CHECK(std::abs(p.x()) < 1e-9);  // the path is vertical: nothing pushes sideways
 }
 
-TEST_CASE("stats file written on close", "[chai3d_adapters][stats]") {
+TEST_CASE("stats file written on close", "[chai3d][stats]") {
   auto selection = fixtureSelection();
   selection.stats_path = "uhaptics-fixture-stats.json";
   std::remove(selection.stats_path.c_str());
@@ -166,7 +166,7 @@ TEST_CASE("stats file written on close", "[chai3d_adapters][stats]") {
   std::remove(selection.stats_path.c_str());
 }
 
-TEST_CASE("stock cToolCursor + mesh: the hand pushes into a box, the proxy pushes back", "[chai3d_adapters][pipeline]") {
+TEST_CASE("stock cToolCursor + mesh: the hand pushes into a box, the proxy pushes back", "[chai3d][pipeline]") {
   // 0.1 m box centred 0.1 m below the workspace centre: its top face at z = -0.05 m. The hand's
   // path goes down to -0.06 m (0.6 of the 0.1 m radius), so contact is certain.
   auto selection = fixtureSelection();

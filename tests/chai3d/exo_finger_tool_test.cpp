@@ -109,7 +109,7 @@ double secondsSince(std::chrono::steady_clock::time_point a_start) {
 }  // namespace
 
 TEST_CASE("exo finger tool: phalanx Jacobians match finite differences of the points",
-          "[chai3d_adapters][exo_tool]") {
+          "[chai3d][exo_tool]") {
   auto device = cExoFingerDevice::create(exoSelection(false));
   FingerScene scene(device);
   const uhaptics::Vec2 x(0.7, 0.9);
@@ -126,7 +126,7 @@ TEST_CASE("exo finger tool: phalanx Jacobians match finite differences of the po
 // A block beside one phalanx (on its dorsal side, away from the other phalanx); the hand (the tool
 // frame) moves the resting finger into it. Only that phalanx's points may feel a force.
 TEST_CASE("exo finger tool: a box pressed on one phalanx loads only that phalanx",
-          "[chai3d_adapters][exo_tool]") {
+          "[chai3d][exo_tool]") {
   for (const auto phalanx : {cExoFingerTool::C_PHALANX_PROXIMAL, cExoFingerTool::C_PHALANX_MIDDLE}) {
     DYNAMIC_SECTION("phalanx " << phalanx) {
       auto device = cExoFingerDevice::create(exoSelection(false));
@@ -180,7 +180,7 @@ TEST_CASE("exo finger tool: a box pressed on one phalanx loads only that phalanx
   }
 }
 
-TEST_CASE("exo finger tool: pressing into a block and releasing is passive", "[chai3d_adapters][exo_tool]") {
+TEST_CASE("exo finger tool: pressing into a block and releasing is passive", "[chai3d][exo_tool]") {
   auto device = cExoFingerDevice::create(exoSelection(true));
   device->setLockStep(true);
   FingerScene scene(device);
@@ -213,7 +213,7 @@ TEST_CASE("exo finger tool: pressing into a block and releasing is passive", "[c
 // t / rise time, t on CHAI3D's wall clock, until the rise time has passed. The bounds below hold
 // whatever the machine's speed: the rise clock starts after t0 and is read before each frame ends.
 TEST_CASE("exo finger tool: CHAI3D's force rise ramps the joint torque up after engagement",
-          "[chai3d_adapters][exo_tool]") {
+          "[chai3d][exo_tool]") {
   auto device = cExoFingerDevice::create(exoSelection(false));
   device->setLockStep(true);
   FingerScene scene(device);
@@ -268,7 +268,7 @@ TEST_CASE("exo finger tool: CHAI3D's force rise ramps the joint torque up after 
 }
 
 // A contact the tool sends as joint torque only (no Cartesian force) is still a proxy contact.
-TEST_CASE("exo finger tool: the device's renderer figures count the tool's contacts", "[chai3d_adapters][exo_tool]") {
+TEST_CASE("exo finger tool: the device's renderer figures count the tool's contacts", "[chai3d][exo_tool]") {
   auto device = cExoFingerDevice::create(exoSelection(true));
   device->setLockStep(true);
   FingerScene scene(device);
@@ -295,7 +295,7 @@ TEST_CASE("exo finger tool: the device's renderer figures count the tool's conta
   CHECK(contact_ticks->value > 0.5 * solves->value);
 }
 
-TEST_CASE("exo finger tool: a haptic frame allocates nothing", "[chai3d_adapters][exo_tool]") {
+TEST_CASE("exo finger tool: a haptic frame allocates nothing", "[chai3d][exo_tool]") {
   auto device = cExoFingerDevice::create(exoSelection(true));
   device->setLockStep(true);
   FingerScene scene(device);

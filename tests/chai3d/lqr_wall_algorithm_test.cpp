@@ -91,7 +91,7 @@ struct TauScene {
 }  // namespace
 
 TEST_CASE("LQR wall algorithm: a 12 N push into a rigid mesh stays under 1 mm, the spring does not",
-          "[chai3d_adapters][lqr_algorithm]") {
+          "[chai3d][lqr_algorithm]") {
   TauScene lqr_scene(true);
   REQUIRE(lqr_scene.tool->start());
   const Run lqr = lqr_scene.run(4000);  // two laps of the hand: two pushes
@@ -118,7 +118,7 @@ TEST_CASE("LQR wall algorithm: a 12 N push into a rigid mesh stays under 1 mm, t
 }
 
 TEST_CASE("LQR wall algorithm: switching it off mid-contact hands back to the spring",
-          "[chai3d_adapters][lqr_algorithm]") {
+          "[chai3d][lqr_algorithm]") {
   TauScene scene(true);
   REQUIRE(scene.tool->start());
   // Into the first push (the hand reaches the block about 0.3 s into the lap) until the wall holds.
@@ -138,7 +138,7 @@ TEST_CASE("LQR wall algorithm: switching it off mid-contact hands back to the sp
   CHECK(scene.device->isLqrWallEngaged());  // still pushed: the wall takes the contact again
 }
 
-TEST_CASE("LQR wall algorithm: a haptic frame allocates nothing", "[chai3d_adapters][lqr_algorithm]") {
+TEST_CASE("LQR wall algorithm: a haptic frame allocates nothing", "[chai3d][lqr_algorithm]") {
   TauScene scene(true, true);
   REQUIRE(scene.tool->start());
   const Run warm = scene.run(1000);  // through free space and into the first push

@@ -10,7 +10,7 @@ using uhaptics::ScriptedHand;
 using uhaptics::ScriptedHandOptions;
 using uhaptics::Vec3;
 
-TEST_CASE("scripted hand anchor travels the closed path at constant speed", "[chai3d][hand]") {
+TEST_CASE("scripted hand anchor travels the closed path at constant speed", "[backends][hand]") {
   ScriptedHandOptions options;
   options.waypoints = {Vec3(0, 0, 1), Vec3(0, 0, -1)};  // 2 r down, 2 r up: lap = 4 r
   options.lap_time = 2.0;
@@ -33,7 +33,7 @@ TEST_CASE("scripted hand anchor travels the closed path at constant speed", "[ch
   CHECK(v.z() > 0.0);
 }
 
-TEST_CASE("scripted hand force is a saturated spring-damper toward the anchor", "[chai3d][hand]") {
+TEST_CASE("scripted hand force is a saturated spring-damper toward the anchor", "[backends][hand]") {
   ScriptedHandOptions options;
   options.waypoints = {Vec3(0, 0, 0), Vec3(1, 0, 0)};
   options.lap_time = 1e3;  // nearly still anchor
@@ -56,7 +56,7 @@ TEST_CASE("scripted hand force is a saturated spring-damper toward the anchor", 
   CHECK(hand.force(INFINITY, Vec3::Zero(), Vec3::Zero()).isZero());
 }
 
-TEST_CASE("scripted hand evaluation allocates nothing", "[chai3d][hand]") {
+TEST_CASE("scripted hand evaluation allocates nothing", "[backends][hand]") {
   const ScriptedHand hand(ScriptedHandOptions{}, 0.1, Vec3::Zero());
   Vec3 sum = Vec3::Zero();
   uhaptics::tools::AllocationScope scope;
@@ -65,7 +65,7 @@ TEST_CASE("scripted hand evaluation allocates nothing", "[chai3d][hand]") {
   CHECK(sum.allFinite());
 }
 
-TEST_CASE("scripted hand rejects invalid options with a message", "[chai3d][hand]") {
+TEST_CASE("scripted hand rejects invalid options with a message", "[backends][hand]") {
   ScriptedHandOptions options;
   options.waypoints = {Vec3(0, 0, 0)};
   CHECK_THROWS_WITH(ScriptedHand(options, 0.1, Vec3::Zero()), Catch::Contains("at least two waypoints"));

@@ -15,8 +15,8 @@
 #include <string>
 #include <vector>
 
-#include "uhaptics/backends/device_descriptor.hpp"
-#include "uhaptics/backends/transport.hpp"
+#include "uhaptics/protocol/device_descriptor.hpp"
+#include "uhaptics/protocol/transport.hpp"
 
 struct libusb_context;
 struct libusb_device_handle;

@@ -1,4 +1,4 @@
-#include "uhaptics/backends/session_stats.hpp"
+#include "uhaptics/chai3d/session_stats.hpp"
 
 #include <algorithm>
 #include <cmath>

@@ -1,4 +1,4 @@
-#include "uhaptics/backends/libusb_transport.hpp"
+#include "uhaptics/protocol/libusb_transport.hpp"
 
 #include <libusb.h>
 

@@ -54,7 +54,7 @@ double rampAt(double a_time, double a_rampTime) {
 
 }  // namespace
 
-TEST_CASE("rhi: specification complete and consistent with the model", "[chai3d_adapters][rhi]") {
+TEST_CASE("rhi: specification complete and consistent with the model", "[chai3d][rhi]") {
   auto device = cRedundantPlanarDevice::create(rhiSelection());
   const cHapticDeviceInfo info = device->getSpecifications();
   const Model& model = device->getModel();
@@ -108,7 +108,7 @@ TEST_CASE("rhi: specification complete and consistent with the model", "[chai3d_
 }
 
 TEST_CASE("rhi: the tool's force is rendered as J^T F and the null space leaves it unchanged",
-          "[chai3d_adapters][rhi]") {
+          "[chai3d][rhi]") {
   auto device = cRedundantPlanarDevice::create(rhiSelection());
   device->setLockStep(true);
   ToolScene scene(device, 0.005);
@@ -173,7 +173,7 @@ TEST_CASE("rhi: the tool's force is rendered as J^T F and the null space leaves 
 }
 
 TEST_CASE("rhi: a stock cToolCursor palpates a cShapeBox (potential field) and is held on top",
-          "[chai3d_adapters][rhi]") {
+          "[chai3d][rhi]") {
   auto device = cRedundantPlanarDevice::create(rhiSelection());
   device->setLockStep(true);
   const double r = device->getSpecifications().m_workspaceRadius;
@@ -208,7 +208,7 @@ TEST_CASE("rhi: a stock cToolCursor palpates a cShapeBox (potential field) and i
 }
 
 TEST_CASE("rhi: in an empty scene the null-space torque ramps up from zero and stays within its bound",
-          "[chai3d_adapters][rhi]") {
+          "[chai3d][rhi]") {
   // An unchanged CHAI3D application with nothing to touch: the default scripted hand (the drop-in
   // examples') moves the device, the cursor renders no force. From home the FME gradient asks for
   // 5.4 N m (beta = 20); without the envelope the first tick commanded the full 3 N m.
@@ -264,7 +264,7 @@ TEST_CASE("rhi: in an empty scene the null-space torque ramps up from zero and s
 }
 
 TEST_CASE("rhi: a stock cToolCursor pressing a stiff object switches to the stiff ellipsoid and back smoothly",
-          "[chai3d_adapters][rhi]") {
+          "[chai3d][rhi]") {
   auto device = cRedundantPlanarDevice::create(rhiSelection());  // the hand palpates down and back, 2 s a lap
   device->setLockStep(true);
   const double stiffness = device->getSpecifications().m_maxLinearStiffness;  // paper 003's 1000 N/m
@@ -329,7 +329,7 @@ TEST_CASE("rhi: a stock cToolCursor pressing a stiff object switches to the stif
   CHECK(transition_step <= 0.8 * bound);
 }
 
-TEST_CASE("rhi: null-space options from CHAI3D code, the selection and the config file", "[chai3d_adapters][rhi]") {
+TEST_CASE("rhi: null-space options from CHAI3D code, the selection and the config file", "[chai3d][rhi]") {
   SECTION("the paper's defaults, changed through the device class, invalid ones refused") {
     auto device = cRedundantPlanarDevice::create(rhiSelection());
     auto options = device->getNullSpaceOptions();
@@ -387,7 +387,7 @@ TEST_CASE("rhi: null-space options from CHAI3D code, the selection and the confi
   }
 }
 
-TEST_CASE("rhi: the statistics file on close shows the contact and the rendered force", "[chai3d_adapters][rhi]") {
+TEST_CASE("rhi: the statistics file on close shows the contact and the rendered force", "[chai3d][rhi]") {
   auto selection = rhiSelection();
   selection.stats_path = "uhaptics-rhi-stats-test.json";
   std::remove(selection.stats_path.c_str());
@@ -411,7 +411,7 @@ TEST_CASE("rhi: the statistics file on close shows the contact and the rendered 
   CHECK(stats.faults == 0);
 }
 
-TEST_CASE("rhi: a servo tick allocates nothing", "[chai3d_adapters][rhi]") {
+TEST_CASE("rhi: a servo tick allocates nothing", "[chai3d][rhi]") {
   auto device = cRedundantPlanarDevice::create(rhiSelection());
   device->setLockStep(true);
   REQUIRE(device->open());

@@ -6,7 +6,7 @@
 #include <cstdint>
 #include <string>
 
-#include "uhaptics/core/wire_protocol.hpp"
+#include "uhaptics/protocol/wire_protocol.hpp"
 
 namespace uhaptics {
 
