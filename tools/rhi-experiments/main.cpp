@@ -160,18 +160,18 @@ int main(int argc, char** argv) {
     summary << "  force capability gain stiff vs free: " << 100.0 * gain << " % (paper: +51 %)\n";
     // The maximum force follows from the kinematics, the torque limits and the configuration the
     // controller settles in: 15 % of the paper's values allows for the unpublished base frame and joint
-    // limits on an otherwise exact kinematic model (README: why the stiff case still misses it).
+    // limits on an otherwise exact kinematic model (docs/rhi.md: why the stiff case still misses it).
     const std::string unpublished_frame =
         "the peak force follows from where the arm's base sits relative to X0 and from its joint limits, "
         "which paper 003 does not publish (docs: the RHI section); a dense scan of the self-motion "
         "manifold at X0 finds no configuration near the paper's value for any joint limit tried";
     table.addWithin("003", "Table I: max force along u, free ellipsoid", 5.674, free_case.peak_force,
                     0.15 * 5.674, "N");
-    table.markNeedsData(unpublished_frame);
     table.addWithin("003", "Table I: max force along u, stiff ellipsoid", 8.564, stiff_case.peak_force,
                     0.15 * 8.564, "N");
     table.markNeedsData(unpublished_frame);
     table.addWithin("003", "Table I: force capability gain stiff vs free", 51.0, 100.0 * gain, 15.0, "%");
+    table.markNeedsData(unpublished_frame);
     table.addBound("003", "palpation stays within the (assumed) joint limits",
                    std::min(free_case.limit_distance, stiff_case.limit_distance), "closest approach > 0",
                    std::min(free_case.limit_distance, stiff_case.limit_distance) > 0.0, "rad");
