@@ -28,10 +28,10 @@ int main(int argc, char** argv) {
     return 2;
   }
   const std::string dir = argv[1];
-  bool ok = write(dir, makeHello(DeviceType::kExoFinger, 0, 0x12345678));
+  bool ok = write(dir, makeHello(DeviceType{1}, 0, 0x12345678));
   Frame f;
   f.type = MessageType::kDeviceInfo;
-  f.device = DeviceType::kTau;
+  f.device = DeviceType{2};
   f.info = DeviceInfo{1, 1, 1, 6, 6, 1000, 0x00010000, 0x12345678};
   ok = ok && write(dir, f);
   f = Frame{};
@@ -44,10 +44,10 @@ int main(int argc, char** argv) {
   ok = ok && write(dir, f);
   const double efforts[kMaxChannels] = {0.1, -0.2, 0.3, -0.4, 1.0, -1.0, 2.0, -2.0};
   for (int n = 0; n <= kMaxChannels; ++n) {
-    ok = ok && write(dir, makeCommand(DeviceType::kRhiPlanar, static_cast<std::uint16_t>(n), CommandMode::kEffort, efforts, n));
+    ok = ok && write(dir, makeCommand(DeviceType{3}, static_cast<std::uint16_t>(n), CommandMode::kEffort, efforts, n));
     f = Frame{};
     f.type = MessageType::kState;
-    f.device = DeviceType::kTau;
+    f.device = DeviceType{2};
     f.sequence = static_cast<std::uint16_t>(1000 + n);
     f.state.status = status::kConfigured | status::kOutputsEnabled;
     f.state.count = static_cast<std::uint8_t>(n);
@@ -57,7 +57,7 @@ int main(int argc, char** argv) {
     }
     ok = ok && write(dir, f);
   }
-  ok = ok && write(dir, makeCommand(DeviceType::kExoFinger, 7, CommandMode::kZero, efforts, 1));
+  ok = ok && write(dir, makeCommand(DeviceType{1}, 7, CommandMode::kZero, efforts, 1));
   if (!ok) {
     std::fprintf(stderr, "uhaptics-wire-corpus: could not write the corpus into %s\n", dir.c_str());
     return 1;

@@ -20,16 +20,6 @@ using namespace uhaptics::testing;
 
 namespace {
 
-const char* deviceName(wire::DeviceType type) {
-  switch (type) {
-    case wire::DeviceType::kExoFinger: return "exo";
-    case wire::DeviceType::kTau: return "tau";
-    case wire::DeviceType::kRhiPlanar: return "rhi";
-    case wire::DeviceType::kTestPlant: break;
-  }
-  return "";
-}
-
 JointIoOptions options() {
   JointIoOptions o;
   o.params_dir = kParamsDir;
@@ -43,7 +33,7 @@ struct Driver {
   std::unique_ptr<DeviceServoRenderer> renderer;
   DeviceSnapshot snapshot;
   std::array<double, wire::kMaxChannels> efforts{};
-  explicit Driver(const DeviceCase& c) : renderer(makeDeviceRenderer(c.type)) {
+  explicit Driver(const DeviceCase& c) : renderer(makeDeviceRenderer(c)) {
     snapshot.joints = c.device().joints;
     snapshot.actuators = c.actuators();
   }
@@ -69,7 +59,7 @@ TEST_CASE("joint I/O factory: names, backends and parameter files are checked", 
   missing.params_dir = "/nonexistent";
   CHECK_THROWS_AS(makeJointIo("tau", "sim", missing), Error);
   for (const DeviceCase& c : allDevices()) {
-    const auto io = makeJointIo(deviceName(c.type), "sim", options());
+    const auto io = makeJointIo(c.definition->name, "sim", options());
     CHECK(io->spec().descriptor.product_id == c.device().product_id);
     CHECK(io->spec().descriptor.joints == c.device().joints);
     CHECK_FALSE(io->isOpen());
@@ -82,7 +72,7 @@ TEST_CASE("joint I/O, sim: each device's renderer drives its simulation, command
           "[servo][jointio]") {
   for (const DeviceCase& c : allDevices()) {
     INFO(c.name());
-    const auto io = makeJointIo(deviceName(c.type), "sim", options());
+    const auto io = makeJointIo(c.definition->name, "sim", options());
     io->open();
     REQUIRE(io->isOpen());
     CHECK(io->describe() == c.name() + ", sim");
@@ -126,10 +116,10 @@ TEST_CASE("joint I/O, emulated: the same renderer through the servo loop and the
           "[servo][jointio]") {
   for (const DeviceCase& c : allDevices()) {
     INFO(c.name());
-    auto renderer = makeDeviceRenderer(c.type);
+    auto renderer = makeDeviceRenderer(c);
     JointIoOptions o = options();
     o.renderer = renderer.get();
-    const auto io = makeJointIo(deviceName(c.type), "emulated", o);
+    const auto io = makeJointIo(c.definition->name, "emulated", o);
     io->open();
     REQUIRE(io->isOpen());
     REQUIRE(io->servoLoop() != nullptr);
@@ -214,7 +204,7 @@ TEST_CASE("joint I/O, usb without a board: open() fails saying what was found, n
   }
   for (const DeviceCase& c : allDevices()) {
     INFO(c.name());
-    const auto io = makeJointIo(deviceName(c.type), "usb", options());
+    const auto io = makeJointIo(c.definition->name, "usb", options());
     try {
       io->open();
       FAIL("open() succeeded without a board");
@@ -247,7 +237,7 @@ double tauDriftWithDelay(double rotational_damping, int delay) {
   TauBoardPlant::Options o;
   o.tool_rotational_damping = rotational_damping;
   TauBoardPlant plant(TauModel::load(kParamsDir + "/tau.json"), o);
-  const DeviceCase c = deviceCase(wire::DeviceType::kTau);
+  const DeviceCase c = deviceCase("tau");
   Driver driver(c);
   std::array<double, wire::kMaxChannels> q0{}, q{};
   plant.readJoints(q0.data());

@@ -32,7 +32,7 @@ struct RenderedRig {
   std::unique_ptr<DeviceServoRenderer> renderer;
   Rig rig;
   RenderedRig(const DeviceCase& c, const ServoConfig& cfg)
-      : renderer(makeDeviceRenderer(c.type)), rig(c, cfg, renderer.get()) {
+      : renderer(makeDeviceRenderer(c)), rig(c, cfg, renderer.get()) {
     rig.loop.connect();
     const Trace t = run(rig, 20, c.actuators());
     REQUIRE(t.lastAsSent());                // the board applies what the host sent...
@@ -80,7 +80,7 @@ TEST_CASE("normal operation: each device through its renderer at 1 kHz for 3 s, 
     cfg.realtime = true;         // used when permitted; the note says which
     cfg.watchdog_periods = 50;   // generous: a noisy shared CI machine must not trip it
     cfg.board_watchdog_us = 100000;  // (stalls of 10+ ms were seen on a loaded 2-core CI machine)
-    const auto renderer = makeDeviceRenderer(c.type);
+    const auto renderer = makeDeviceRenderer(c);
     Rig rig(c, cfg, renderer.get());
     const wire::DeviceInfo info = rig.loop.connect();
     CHECK(info.selected_version == wire::kProtocolVersion);
@@ -416,10 +416,10 @@ TEST_CASE("handshake failures say what is wrong and what to do", "[servo][errors
   SECTION("wrong device on the other end") {
     LinearTestPlant plant(LinearTestPlant::Params{2, 1});
     BoardEmulator::Config exo_board;
-    exo_board.device = wire::DeviceType::kExoFinger;
+    exo_board.device = kExo.type;
     BoardEmulator board(exo_board, plant);
     ServoLoop loop(kTau.device(), board, handDrivenConfig(kTau));
-    CHECK_THROWS_WITH(loop.connect(), Catch::Contains("device type 'finger exoskeleton'") &&
+    CHECK_THROWS_WITH(loop.connect(), Catch::Contains("reports device 'finger exoskeleton' (code 1)") &&
                                           Catch::Contains("expected 'TAU'"));
   }
   SECTION("no answer") {

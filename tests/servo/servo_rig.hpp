@@ -26,6 +26,7 @@ inline constexpr bool kRealTimeBounds = true;
 #endif
 
 struct DeviceCase {
+  const DeviceDefinition* definition;
   wire::DeviceType type;
   BoardSpec spec;
   const DeviceDescriptor& device() const { return spec.descriptor; }
@@ -33,16 +34,22 @@ struct DeviceCase {
   int actuators() const { return spec.descriptor.actuators; }
   double limit(int i) const { return spec.descriptor.effort_limit[static_cast<std::size_t>(i)]; }
 };
-inline DeviceCase deviceCase(wire::DeviceType type) { return {type, boardSpec(type, kParamsDir)}; }
+inline DeviceCase deviceCase(const std::string& name) {
+  const DeviceDefinition& d = findDevice(name);
+  return {&d, wire::DeviceType{d.wire_code}, boardSpec(d, kParamsDir)};
+}
+/// Every registered device.
 inline const std::vector<DeviceCase>& allDevices() {
-  static const std::vector<DeviceCase> all = {deviceCase(wire::DeviceType::kExoFinger),
-                                              deviceCase(wire::DeviceType::kTau),
-                                              deviceCase(wire::DeviceType::kRhiPlanar)};
+  static const std::vector<DeviceCase> all = [] {
+    std::vector<DeviceCase> cases;
+    for (const DeviceDefinition* d : deviceDefinitions()) cases.push_back(deviceCase(d->name));
+    return cases;
+  }();
   return all;
 }
 
-inline std::unique_ptr<DeviceServoRenderer> makeDeviceRenderer(wire::DeviceType type) {
-  return uhaptics::makeDeviceRenderer(type, kParamsDir);
+inline std::unique_ptr<DeviceServoRenderer> makeDeviceRenderer(const DeviceCase& c) {
+  return uhaptics::makeDeviceRenderer(*c.definition, kParamsDir);
 }
 
 /// Settings for hand-driven ticks: a 3-period host watchdog, quick reconnects, no SCHED_FIFO.
@@ -64,7 +71,7 @@ struct Rig {
   BoardEmulator board;
   ServoLoop loop;
   Rig(const DeviceCase& c, const ServoConfig& cfg, ServoRenderer* renderer = nullptr, BoardEmulator::Config board_cfg = {})
-      : plant(makeDevicePlant(c.type, kParamsDir)),
+      : plant(c.definition->make_plant(c.spec.params_path)),
         board(withDevice(board_cfg, c), *plant),
         loop(c.device(), board, cfg, renderer) {}
   static BoardEmulator::Config withDevice(BoardEmulator::Config b, const DeviceCase& c) {

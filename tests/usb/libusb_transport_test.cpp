@@ -21,7 +21,7 @@ namespace {
 DeviceDescriptor tauDescriptor() {
   DeviceDescriptor d;
   d.name = "TAU";
-  d.type = wire::DeviceType::kTau;
+  d.type = wire::DeviceType{2};
   d.vendor_id = 0x1209;
   d.product_id = 0x0002;
   d.joints = 6;
@@ -77,8 +77,8 @@ TEST_CASE("opening errors come with what to do", "[usb][libusb]") {
 TEST_CASE("the shipped udev rule covers every device's vendor/product id", "[usb][udev]") {
   const std::string rules = readFile(kUdevRule);
   REQUIRE_FALSE(rules.empty());
-  for (const auto type : {wire::DeviceType::kExoFinger, wire::DeviceType::kTau, wire::DeviceType::kRhiPlanar}) {
-    const DeviceDescriptor d = boardSpec(type, UHAPTICS_PARAMS_DIR).descriptor;
+  for (const DeviceDefinition* device : deviceDefinitions()) {
+    const DeviceDescriptor d = boardSpec(*device, UHAPTICS_PARAMS_DIR).descriptor;
     char line[96];
     std::snprintf(line, sizeof line, "ATTRS{idVendor}==\"%04x\", ATTRS{idProduct}==\"%04x\"", d.vendor_id,
                   d.product_id);
@@ -95,7 +95,7 @@ TEST_CASE("descriptor from a parameter file's usb section", "[usb][params]") {
             "protocol_version": 1}})";
   const ParamFile file = ParamFile::parse(text, "tau.json");
   const double limits[6] = {2, 2, 2, 2, 2, 2};
-  const DeviceDescriptor d = DeviceDescriptor::fromParams(file, wire::DeviceType::kTau, "TAU", 6, 6, limits);
+  const DeviceDescriptor d = DeviceDescriptor::fromParams(file, wire::DeviceType{2}, "TAU", 6, 6, limits);
   CHECK(d.vendor_id == 0x1209);
   CHECK(d.product_id == 0x0002);
   CHECK(d.endpoint_in == 0x81);
@@ -103,18 +103,18 @@ TEST_CASE("descriptor from a parameter file's usb section", "[usb][params]") {
 
   const char* future = R"({"usb": {"vendor_id": 4617, "product_id": 2, "interface": 0, "endpoint_in": 129,
                                     "endpoint_out": 1, "protocol_version": 7}})";
-  CHECK_THROWS_WITH(DeviceDescriptor::fromParams(ParamFile::parse(future, "f.json"), wire::DeviceType::kTau,
+  CHECK_THROWS_WITH(DeviceDescriptor::fromParams(ParamFile::parse(future, "f.json"), wire::DeviceType{2},
                                                  "TAU", 6, 6, limits),
                     Catch::Contains("f.json") && Catch::Contains("protocol_version 7 is not spoken"));
   const char* bad_endpoint = R"({"usb": {"vendor_id": 4617, "product_id": 2, "interface": 0, "endpoint_in": 1,
                                           "endpoint_out": 1, "protocol_version": 1}})";
-  CHECK_THROWS_WITH(DeviceDescriptor::fromParams(ParamFile::parse(bad_endpoint, "e.json"), wire::DeviceType::kTau,
+  CHECK_THROWS_WITH(DeviceDescriptor::fromParams(ParamFile::parse(bad_endpoint, "e.json"), wire::DeviceType{2},
                                                  "TAU", 6, 6, limits),
                     Catch::Contains("usb/endpoint_in"));
   const double bad_limits[6] = {2, 2, 2, 2, 2, -1};
   const char* ok = R"({"usb": {"vendor_id": 4617, "product_id": 2, "interface": 0, "endpoint_in": 129,
                                 "endpoint_out": 1, "protocol_version": 1}})";
-  CHECK_THROWS_WITH(DeviceDescriptor::fromParams(ParamFile::parse(ok, "l.json"), wire::DeviceType::kTau, "TAU",
+  CHECK_THROWS_WITH(DeviceDescriptor::fromParams(ParamFile::parse(ok, "l.json"), wire::DeviceType{2}, "TAU",
                                                  6, 6, bad_limits),
                     Catch::Contains("effort limit of actuator 5"));
 }

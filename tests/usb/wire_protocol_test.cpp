@@ -44,7 +44,7 @@ void fixCrc(Bytes& b) {
 Frame sampleState(int joints) {
   Frame f;
   f.type = MessageType::kState;
-  f.device = DeviceType::kTau;
+  f.device = DeviceType{2};
   f.sequence = 0xFFFE;
   f.state.board_time_us = 123456789;
   f.state.last_command_sequence = 77;
@@ -73,10 +73,10 @@ TEST_CASE("CRC-16/CCITT-FALSE matches its published check value", "[usb][protoco
 
 TEST_CASE("every message type round-trips bit-exactly", "[usb][protocol]") {
   std::vector<Frame> frames;
-  frames.push_back(makeHello(DeviceType::kExoFinger, 1, 0xDEADBEEF));
+  frames.push_back(makeHello(DeviceType{1}, 1, 0xDEADBEEF));
   Frame info;
   info.type = MessageType::kDeviceInfo;
-  info.device = DeviceType::kRhiPlanar;
+  info.device = DeviceType{3};
   info.info = DeviceInfo{1, 3, 1, 4, 4, 1000, 0x00020001, 42};
   frames.push_back(info);
   Frame cfg;
@@ -88,8 +88,8 @@ TEST_CASE("every message type round-trips bit-exactly", "[usb][protocol]") {
   ack.ack = Ack{9, MessageType::kConfigure, BoardError::kInvalidConfig};
   frames.push_back(ack);
   const double efforts[6] = {0.5, -2.0, 1e-3, 0.0, -0.0, 1.75};
-  frames.push_back(makeCommand(DeviceType::kTau, 65535, CommandMode::kEffort, efforts, 6));
-  frames.push_back(makeCommand(DeviceType::kTau, 3, CommandMode::kZero, efforts, 6));
+  frames.push_back(makeCommand(DeviceType{2}, 65535, CommandMode::kEffort, efforts, 6));
+  frames.push_back(makeCommand(DeviceType{2}, 3, CommandMode::kZero, efforts, 6));
   for (int joints = 0; joints <= kMaxChannels; ++joints) frames.push_back(sampleState(joints));
 
   for (const Frame& f : frames) {
@@ -186,7 +186,7 @@ TEST_CASE("each malformed field is rejected with its own reason and counted", "[
   { auto b = state; b[kHeaderSize + 7] = 99; expect(b, Reject::kBadField); }      // unknown error code
   {
     const double one = 1.0;
-    auto b = bytesOf(makeCommand(DeviceType::kExoFinger, 1, CommandMode::kZero, &one, 1));
+    auto b = bytesOf(makeCommand(DeviceType{1}, 1, CommandMode::kZero, &one, 1));
     const float f = 1.0f;  // zero mode with a non-zero value
     std::memcpy(&b[kHeaderSize + 4], &f, 4);
     expect(b, Reject::kBadField);
@@ -208,7 +208,7 @@ TEST_CASE("each malformed field is rejected with its own reason and counted", "[
 }
 
 TEST_CASE("HELLO keeps its layout across versions so negotiation always works", "[usb][protocol]") {
-  Frame hello = makeHello(DeviceType::kTau, 0, 1);
+  Frame hello = makeHello(DeviceType{2}, 0, 1);
   hello.version = 9;  // a future host
   hello.hello.min_version = 2;
   hello.hello.max_version = 9;
@@ -227,9 +227,9 @@ TEST_CASE("HELLO keeps its layout across versions so negotiation always works", 
 TEST_CASE("the encoder refuses frames the decoder would reject and never overruns", "[usb][protocol]") {
   std::uint8_t buf[kMaxFrameSize];
   const double nan = std::nan("");
-  CHECK(encode(makeCommand(DeviceType::kTau, 0, CommandMode::kEffort, &nan, 1), buf, sizeof buf) == 0);
+  CHECK(encode(makeCommand(DeviceType{2}, 0, CommandMode::kEffort, &nan, 1), buf, sizeof buf) == 0);
   const double huge = 1e300;  // beyond float range
-  CHECK(encode(makeCommand(DeviceType::kTau, 0, CommandMode::kEffort, &huge, 1), buf, sizeof buf) == 0);
+  CHECK(encode(makeCommand(DeviceType{2}, 0, CommandMode::kEffort, &huge, 1), buf, sizeof buf) == 0);
   Frame f = sampleState(kMaxChannels);
   f.state.count = kMaxChannels + 1;
   CHECK(encode(f, buf, sizeof buf) == 0);

@@ -69,34 +69,14 @@ class MeasuringRenderer final : public ServoRenderer {
   std::atomic<std::uint32_t> max_age_us_{0};
 };
 
-// What the papers state about each device's link, next to what was measured here.
-struct PaperRates {
-  const char* paper;
-  double exchange_hz;  // NaN: not published
-  const char* exchange_text;
-  double sampling_hz;
-  const char* sampling_text;
-};
-PaperRates paperRates(wire::DeviceType type) {
-  switch (type) {
-    case wire::DeviceType::kExoFinger:
-      return {"000", 500.0, "USB link to the host at 500 Hz", 1000.0, "board samples at 1 kHz"};
-    case wire::DeviceType::kTau:
-      return {"001", 1000.0, "control at 1 kHz", 1000.0, "1 kHz sampling (the controller's)"};
-    default:
-      return {"003", std::numeric_limits<double>::quiet_NaN(), "no rate published",
-              std::numeric_limits<double>::quiet_NaN(), "no rate published"};
-  }
-}
-
 struct DeviceRun {
   bool ok = false;
 };
 
 DeviceRun runDevice(const std::string& device_name, const Settings& st, const std::string& out,
                     tools::ReproductionTable& table) {
-  const wire::DeviceType type = deviceTypeFromName(device_name);
-  const BoardSpec spec = st.params.empty() ? boardSpec(type, UHAPTICS_PARAMS_DIR) : boardSpecFromFile(type, st.params);
+  const DeviceDefinition& definition = findDevice(device_name);
+  const BoardSpec spec = st.params.empty() ? boardSpec(definition, UHAPTICS_PARAMS_DIR) : boardSpecFromFile(definition, st.params);
   const DeviceDescriptor& device = spec.descriptor;
   ServoConfig cfg;
   cfg.rate_hz = st.rate > 0.0 ? st.rate : spec.servo_rate_hz;
@@ -111,7 +91,7 @@ DeviceRun runDevice(const std::string& device_name, const Settings& st, const st
   if (st.usb) {
     transport = std::make_unique<LibusbTransport>(device);
   } else {
-    plant = makeDevicePlant(type, UHAPTICS_PARAMS_DIR);
+    plant = definition.make_plant(spec.params_path);
     BoardEmulator::Config board;
     board.device = device.type;
     board.sample_rate_hz = spec.sample_rate_hz;
@@ -119,7 +99,7 @@ DeviceRun runDevice(const std::string& device_name, const Settings& st, const st
     transport = std::make_unique<BoardEmulator>(board, *plant);
   }
   const bool with_renderer = !st.usb || st.renderer;
-  const auto renderer = with_renderer ? makeDeviceRenderer(type, UHAPTICS_PARAMS_DIR) : nullptr;
+  const auto renderer = with_renderer ? makeDeviceRenderer(definition, UHAPTICS_PARAMS_DIR) : nullptr;
   MeasuringRenderer measuring(renderer.get());
   ServoLoop loop(device, *transport, cfg, &measuring);
   const wire::DeviceInfo info = loop.connect();
@@ -172,7 +152,7 @@ DeviceRun runDevice(const std::string& device_name, const Settings& st, const st
   const ServoCounters k = loop.counters();
   const std::string where = st.usb ? "USB board" : "emulated board";
   const std::string who = device.name + ", " + where + ": ";
-  const PaperRates paper = paperRates(type);
+  const PublishedLink& paper = definition.published_link;
   const double achieved_hz = timing.period.mean_us > 0.0 ? 1e6 / timing.period.mean_us : 0.0;
   const bool at_paper_rate = !std::isnan(paper.exchange_hz) && std::abs(cfg.rate_hz - paper.exchange_hz) < 1e-9;
   if (at_paper_rate) {
@@ -206,7 +186,13 @@ int main(int argc, char** argv) {
   Settings st;
   std::string device_name = "tau";
   st.out = "out/servo";
-  app.add_option("--device", device_name, "exo, tau, rhi or all")->check(CLI::IsMember({"exo", "tau", "rhi", "all"}));
+  std::vector<std::string> choices;
+  for (const DeviceDefinition* d : deviceDefinitions()) choices.push_back(d->name);
+  app.add_option("--device", device_name, deviceNameList() + " or all")->check(CLI::IsMember([&] {
+    auto all = choices;
+    all.push_back("all");
+    return all;
+  }()));
   app.add_option("--rate", st.rate, "servo rate in Hz, 500..10000 (default: the device's usb/servo_rate_hz)");
   app.add_option("--seconds", st.seconds, "run time per device")->check(CLI::Range(0.1, 600.0));
   app.add_option("--amplitude", st.amplitude,
@@ -222,7 +208,7 @@ int main(int argc, char** argv) {
 
   try {
     const std::vector<std::string> devices =
-        device_name == "all" ? std::vector<std::string>{"exo", "tau", "rhi"} : std::vector<std::string>{device_name};
+        device_name == "all" ? choices : std::vector<std::string>{device_name};
     if (devices.size() > 1 && !st.params.empty()) throw Error("--params names one device's file: use it with one --device");
     tools::ensureDirectory(st.out);
     tools::ReproductionTable table;

@@ -91,20 +91,4 @@ void RhiBoardPlant::advance(double dt) noexcept {
   if (n > 0) sim_.step(command_, static_cast<double>(n) * clock_.period());
 }
 
-std::unique_ptr<BoardPlant> makeDevicePlant(wire::DeviceType type, const std::string& params_dir) {
-  switch (type) {
-    case wire::DeviceType::kExoFinger:
-      return std::make_unique<ExoFingerBoardPlant>(ExoFingerModel::load(ExoFingerModel::defaultParamsPath(params_dir)),
-                                                   ExoFingerBoardPlant::Options{});
-    case wire::DeviceType::kTau:
-      return std::make_unique<TauBoardPlant>(TauModel::load(params_dir + "/tau.json"), TauBoardPlant::Options{});
-    case wire::DeviceType::kRhiPlanar:
-      return std::make_unique<RhiBoardPlant>(Rhi4Model::fromFile(params_dir + "/rhi4.json", "rhi4"),
-                                             RhiBoardPlant::Options{});
-    case wire::DeviceType::kTestPlant:
-      break;
-  }
-  throw Error("makeDevicePlant: the test plant is not a device (use LinearTestPlant)");
-}
-
 }  // namespace uhaptics

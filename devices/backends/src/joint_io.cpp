@@ -5,7 +5,6 @@
 #include <cmath>
 
 #include "uhaptics/backends/board_emulator.hpp"
-#include "uhaptics/backends/device_plants.hpp"
 #include "uhaptics/protocol/libusb_transport.hpp"
 #include "uhaptics/core/fault.hpp"
 
@@ -18,11 +17,11 @@ using Channels = std::array<double, wire::kMaxChannels>;
 // servo loop's, so a renderer behaves identically on every backend.
 class SimJointIo final : public JointIo {
  public:
-  SimJointIo(BoardSpec spec, std::string params_dir) : JointIo(std::move(spec), "sim"), params_dir_(std::move(params_dir)) {}
+  SimJointIo(const DeviceDefinition& device, BoardSpec spec) : JointIo(std::move(spec), "sim"), device_(device) {}
 
   void open() override {
     if (plant_) return;
-    plant_ = makeDevicePlant(spec().descriptor.type, params_dir_);
+    plant_ = device_.make_plant(spec().params_path);
   }
   void close() noexcept override {
     if (!plant_) return;
@@ -55,7 +54,7 @@ class SimJointIo final : public JointIo {
   std::string describe() const override { return spec().descriptor.name + ", sim"; }
 
  private:
-  std::string params_dir_;
+  const DeviceDefinition& device_;
   double time_us_ = 0.0;
   std::unique_ptr<BoardPlant> plant_;
 };
@@ -63,8 +62,8 @@ class SimJointIo final : public JointIo {
 // "emulated" and "usb": a transport to a board and the real-time servo loop on it.
 class ServoJointIo final : public JointIo {
  public:
-  ServoJointIo(BoardSpec spec, std::string backend, std::string params_dir, ServoConfig servo, ServoRenderer* renderer)
-      : JointIo(std::move(spec), std::move(backend)), params_dir_(std::move(params_dir)), servo_(servo), renderer_(renderer) {
+  ServoJointIo(const DeviceDefinition& device, BoardSpec spec, std::string backend, ServoConfig servo, ServoRenderer* renderer)
+      : JointIo(std::move(spec), std::move(backend)), device_(device), servo_(servo), renderer_(renderer) {
     if (servo_.rate_hz == 0.0) servo_.rate_hz = this->spec().servo_rate_hz;
     if (servo_.board_watchdog_us == 0) servo_.board_watchdog_us = this->spec().board_watchdog_us;
     servo_.validate();
@@ -78,7 +77,7 @@ class ServoJointIo final : public JointIo {
       if (backend() == "usb") {
         transport_ = std::make_unique<LibusbTransport>(d);  // throws: no device found (lists what was)
       } else {
-        plant_ = makeDevicePlant(d.type, params_dir_);
+        plant_ = device_.make_plant(spec().params_path);
         BoardEmulator::Config board;
         board.device = d.type;
         board.sample_rate_hz = spec().sample_rate_hz;
@@ -124,7 +123,7 @@ class ServoJointIo final : public JointIo {
   }
 
  private:
-  std::string params_dir_;
+  const DeviceDefinition& device_;
   ServoConfig servo_;
   ServoRenderer* renderer_;
   std::unique_ptr<BoardPlant> plant_;
@@ -155,15 +154,15 @@ std::vector<std::string> jointIoBackends() { return {"sim", "emulated", "usb"}; 
 
 std::unique_ptr<JointIo> makeJointIo(const std::string& device, const std::string& backend,
                                      const JointIoOptions& options) {
-  const wire::DeviceType type = deviceTypeFromName(device);
+  const DeviceDefinition& definition = findDevice(device);  // throws naming the registered devices
   const auto backends = jointIoBackends();
   if (std::find(backends.begin(), backends.end(), backend) == backends.end())
     throw Error("unknown backend '" + backend + "' for device '" + device + "': use sim, emulated or usb");
   if (options.params_dir.empty()) throw Error("makeJointIo: params_dir is required (the device parameter files)");
-  BoardSpec spec = options.params_file.empty() ? boardSpec(type, options.params_dir)
-                                               : boardSpecFromFile(type, options.params_file);
-  if (backend == "sim") return std::make_unique<SimJointIo>(std::move(spec), options.params_dir);
-  return std::make_unique<ServoJointIo>(std::move(spec), backend, options.params_dir, options.servo, options.renderer);
+  BoardSpec spec = options.params_file.empty() ? boardSpec(definition, options.params_dir)
+                                               : boardSpecFromFile(definition, options.params_file);
+  if (backend == "sim") return std::make_unique<SimJointIo>(definition, std::move(spec));
+  return std::make_unique<ServoJointIo>(definition, std::move(spec), backend, options.servo, options.renderer);
 }
 
 }  // namespace uhaptics

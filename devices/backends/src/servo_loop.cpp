@@ -12,11 +12,21 @@
 #include <cstring>
 #include <sstream>
 
+#include "uhaptics/backends/device_definition.hpp"
 #include "uhaptics/core/fault.hpp"
 #include "uhaptics/core/limits.hpp"
 
 namespace uhaptics {
 namespace {
+
+// "'TAU' (code 2)": a protocol device code with the registered device that has it.
+std::string deviceLabel(wire::DeviceType code) {
+  const auto raw = std::to_string(static_cast<int>(code));
+  if (code == wire::DeviceType::kTestPlant) return "'test plant' (code 0)";
+  const DeviceDefinition* d = findDevice(code);
+  return d ? "'" + d->title + "' (code " + raw + ")" : "code " + raw + " (no registered device)";
+}
+
 
 std::int64_t monotonicNs() noexcept {
   timespec ts{};
@@ -231,9 +241,9 @@ wire::DeviceInfo ServoLoop::connect() {
                   hex(info.firmware_version, 8) + ") speaks " + versions(info.min_version, info.max_version) +
                   ". Update the board's firmware or uhaptics so that they share a version.");
     case HandshakeResult::kWrongDevice:
-      throw Error(who + "the board reports device type '" + wire::toString(rx_frame_.device) + "' with " +
+      throw Error(who + "the board reports device " + deviceLabel(rx_frame_.device) + " with " +
                   std::to_string(info.joint_count) + " joints and " + std::to_string(info.actuator_count) +
-                  " actuators; expected '" + wire::toString(device_.type) + "' with " + std::to_string(device_.joints) +
+                  " actuators; expected " + deviceLabel(device_.type) + " with " + std::to_string(device_.joints) +
                   " and " + std::to_string(device_.actuators) + ". Check the vendor/product id in the parameter file.");
     case HandshakeResult::kRefused:
       throw Error(who + "the board refused CONFIGURE (" + wire::toString(rx_frame_.ack.error) +

@@ -216,7 +216,7 @@ const char* toString(Reject r) noexcept {
     case Reject::kBadSync: return "bad sync bytes";
     case Reject::kUnsupportedVersion: return "unsupported protocol version";
     case Reject::kUnknownType: return "unknown message type";
-    case Reject::kUnknownDevice: return "unknown device type";
+    case Reject::kUnknownDevice: return "reserved device code";
     case Reject::kPayloadTooLong: return "payload length above maximum";
     case Reject::kBadLength: return "payload length does not match message type";
     case Reject::kBadCrc: return "CRC mismatch";
@@ -244,18 +244,8 @@ const char* toString(BoardError e) noexcept {
   return "unknown board error";
 }
 
-const char* toString(DeviceType d) noexcept {
-  switch (d) {
-    case DeviceType::kTestPlant: return "test plant";
-    case DeviceType::kExoFinger: return "finger exoskeleton";
-    case DeviceType::kTau: return "TAU";
-    case DeviceType::kRhiPlanar: return "RHI planar";
-  }
-  return "unknown device";
-}
-
 bool isKnownDevice(std::uint8_t raw) noexcept {
-  return raw <= static_cast<std::uint8_t>(DeviceType::kRhiPlanar);
+  return raw <= kMaxDeviceCode;
 }
 
 std::uint64_t DecoderStats::totalRejected() const noexcept {

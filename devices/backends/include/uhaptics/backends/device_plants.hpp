@@ -136,8 +136,4 @@ class RhiBoardPlant final : public HeldTorquePlant<4> {
   FixedStepClock clock_;
 };
 
-/// The device's plant with default options, its model loaded from `params_dir` (exo_finger.json,
-/// tau.json, rhi4.json). Throws Error for kTestPlant or a malformed parameter file.
-std::unique_ptr<BoardPlant> makeDevicePlant(wire::DeviceType type, const std::string& params_dir);
-
 }  // namespace uhaptics

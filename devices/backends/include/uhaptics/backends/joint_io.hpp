@@ -100,7 +100,7 @@ class JointRateEstimator {
 
 /// Backends the factory offers, in the order to list them.
 std::vector<std::string> jointIoBackends();
-/// Device "exo", "tau" or "rhi"; backend one of jointIoBackends(). Loads and validates the device's
+/// A registered device's name (device_definition.hpp); backend one of jointIoBackends(). Loads and validates the device's
 /// parameter file; throws Error naming the valid choices for an unknown device or backend.
 std::unique_ptr<JointIo> makeJointIo(const std::string& device, const std::string& backend,
                                      const JointIoOptions& options);

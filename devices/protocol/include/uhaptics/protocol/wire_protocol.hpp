@@ -48,12 +48,13 @@ enum class MessageType : std::uint8_t {
   kState = 0x11,        // board -> host: joint readings with timestamps, status
 };
 
+/// The device code in every frame's header. 0 is the emulator-only test plant; 1 .. kMaxDeviceCode
+/// are the devices' codes, each assigned in the device's definition (devices/<device>/, see
+/// uhaptics/backends/device_definition.hpp); higher codes are reserved and rejected.
 enum class DeviceType : std::uint8_t {
-  kTestPlant = 0x00,    // emulator-only plant used by the protocol tests
-  kExoFinger = 0x01,
-  kTau = 0x02,
-  kRhiPlanar = 0x03,
+  kTestPlant = 0x00,
 };
+inline constexpr std::uint8_t kMaxDeviceCode = 0x3F;
 
 /// Board-side condition carried in STATE and ACK frames.
 enum class BoardError : std::uint8_t {
@@ -148,7 +149,7 @@ enum class Reject : std::uint8_t {
   kBadSync,              // first two bytes are not A5 5A
   kUnsupportedVersion,   // version outside [kMinProtocolVersion, kMaxProtocolVersion] (non-HELLO)
   kUnknownType,
-  kUnknownDevice,
+  kUnknownDevice,       // device code above kMaxDeviceCode (reserved)
   kPayloadTooLong,       // declared length above kMaxPayload
   kBadLength,            // declared length does not match what the type (and its count) needs
   kBadCrc,
@@ -162,7 +163,7 @@ inline constexpr std::size_t kRejectReasons = static_cast<std::size_t>(Reject::k
 
 const char* toString(Reject r) noexcept;
 const char* toString(BoardError e) noexcept;
-const char* toString(DeviceType d) noexcept;
+/// A code in 0 .. kMaxDeviceCode (the decoder rejects the others as kUnknownDevice).
 bool isKnownDevice(std::uint8_t raw) noexcept;
 
 /// Accepted/rejected counters. Plain integers: owned by one thread (the one decoding).

@@ -1,0 +1,68 @@
+#pragma once
+// What the host knows of one device, defined once in the device's own folder (devices/<device>/)
+// and registered with one line in devices/CMakeLists.txt (uhaptics_add_device). Every list of
+// devices (the protocol's device codes, the board catalog, the simulated plants, the servo tool,
+// the CHAI3D registry, the CMake list the drop-in tests run) is derived from those registrations.
+// docs/adding-a-device.md walks through adding one.
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "uhaptics/backends/board_plant.hpp"
+#include "uhaptics/protocol/device_descriptor.hpp"
+
+namespace uhaptics {
+
+class ParamFile;
+
+struct BoardSpec {
+  DeviceDescriptor descriptor;
+  double servo_rate_hz = 0.0;         // host <-> board exchange rate (the exoskeleton's USB: 500 Hz)
+  double sample_rate_hz = 0.0;        // board sensor sampling
+  std::uint32_t board_watchdog_us = 0;  // what the host configures with CONFIGURE
+  std::string params_path;            // the file it came from
+};
+
+/// What the device's paper states about its link (NaN and "no rate published" where it says nothing),
+/// for the servo tool's rows that set the rates measured here beside the paper's.
+struct PublishedLink {
+  std::string paper;          // e.g. "001"
+  double exchange_hz = 0.0;   // host <-> board exchange
+  std::string exchange_text;
+  double sampling_hz = 0.0;   // the board's sampling
+  std::string sampling_text;
+};
+
+struct DeviceDefinition {
+  /// Short name users select it by (UHAPTICS_DEVICE, --device), set by its registration line.
+  std::string name;
+  /// For messages and descriptors, e.g. "TAU".
+  std::string title;
+  /// One line: what it is and how it renders (listed by the tools and the CHAI3D registry).
+  std::string summary;
+  /// The protocol's device code in every frame, 1 .. wire::kMaxDeviceCode, unique.
+  std::uint8_t wire_code = 0;
+  /// Its paper's statements about the link.
+  PublishedLink published_link;
+  /// Its parameter file in the parameter folder (devices/params).
+  std::string params_file;
+  /// The board as the host sees it: joint and actuator counts and effort limits from the device's
+  /// model, written into spec.descriptor with DeviceDescriptor::fromParams; rates stated twice
+  /// (model and "usb" section) are checked to agree. Throws Error naming the file and field.
+  void (*describe_board)(const DeviceDefinition& self, const ParamFile& file, BoardSpec& spec) = nullptr;
+  /// The simulated device as its board drives it, with its own user (the "sim" joint I/O and the
+  /// board emulator's device), its model loaded from the parameter file at params_path.
+  std::unique_ptr<BoardPlant> (*make_plant)(const std::string& params_path) = nullptr;
+};
+
+/// The registered devices, in registration order (validated once: names and codes unique).
+const std::vector<const DeviceDefinition*>& deviceDefinitions();
+/// By name; throws Error listing the registered names.
+const DeviceDefinition& findDevice(const std::string& name);
+/// By protocol device code; nullptr when no device has it.
+const DeviceDefinition* findDevice(wire::DeviceType code);
+/// "exo, tau or rhi": the registered names, for messages.
+std::string deviceNameList();
+
+}  // namespace uhaptics
