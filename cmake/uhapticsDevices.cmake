@@ -40,3 +40,19 @@ endfunction()
 function(uhaptics_use_device_list target)
   target_include_directories(${target} PRIVATE "${UHAPTICS_GENERATED_INCLUDE_DIR}")
 endfunction()
+
+# In a device.cmake: adds the device's <layer> folder to that layer's library <target> (skipped when
+# the target is not built, e.g. the CHAI3D layer with UHAPTICS_WITH_CHAI3D=OFF): its src/*.cpp as
+# sources, its include/ as a public include folder, installed with the library's headers.
+function(uhaptics_device_layer layer target)
+  if(NOT TARGET ${target})
+    return()
+  endif()
+  set(dir "${CMAKE_CURRENT_LIST_DIR}/${layer}")
+  file(GLOB sources CONFIGURE_DEPENDS "${dir}/src/*.cpp")
+  target_sources(${target} PRIVATE ${sources})
+  if(EXISTS "${dir}/include")
+    target_include_directories(${target} PUBLIC "$<BUILD_INTERFACE:${dir}/include>")
+    install(DIRECTORY "${dir}/include/" DESTINATION ${CMAKE_INSTALL_INCLUDEDIR})
+  endif()
+endfunction()

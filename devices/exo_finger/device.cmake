@@ -1,9 +1,5 @@
-# What is specific to this device, one folder per layer, each added to its layer's library (read by
-# uhaptics_add_device in devices/CMakeLists.txt).
-target_sources(uhaptics_backends PRIVATE ${CMAKE_CURRENT_LIST_DIR}/backend/exo_finger_definition.cpp)
-if(TARGET uhaptics_servo_devices)
-  target_sources(uhaptics_servo_devices PRIVATE ${CMAKE_CURRENT_LIST_DIR}/servo/exo_finger_servo_renderer.cpp)
-endif()
-if(TARGET uhaptics_chai3d_adapters)
-  target_sources(uhaptics_chai3d_adapters PRIVATE ${CMAKE_CURRENT_LIST_DIR}/chai3d/exo_finger_chai3d.cpp)
-endif()
+# The finger exoskeleton: each layer's folder joins that layer's library (uhaptics_device_layer).
+uhaptics_device_layer(model uhaptics_models)
+uhaptics_device_layer(backend uhaptics_backends)
+uhaptics_device_layer(chai3d uhaptics_chai3d_adapters)
+uhaptics_device_layer(servo uhaptics_servo_devices)

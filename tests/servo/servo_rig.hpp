@@ -1,6 +1,6 @@
 #pragma once
 // The host path wired end to end for the servo tests: the device's renderer -> ServoLoop (safety
-// stage) -> wire protocol -> BoardEmulator -> the device's own simulation (device_plants.hpp), with
+// stage) -> wire protocol -> BoardEmulator -> the device's own simulation (its plant, devices/<device>/backend), with
 // the channel layout, limits and USB identity read from the device's parameter file.
 #include <memory>
 #include <string>
@@ -9,7 +9,7 @@
 #include "device_servo_renderers.hpp"
 #include "uhaptics/backends/board_catalog.hpp"
 #include "uhaptics/backends/board_emulator.hpp"
-#include "uhaptics/backends/device_plants.hpp"
+#include "uhaptics/backends/tau_plant.hpp"  // TauBoardPlant with its own options (joint_io_test)
 #include "uhaptics/backends/servo_loop.hpp"
 
 namespace uhaptics::testing {

@@ -28,7 +28,6 @@
 #include "device_servo_renderers.hpp"
 #include "uhaptics/backends/board_catalog.hpp"
 #include "uhaptics/backends/board_emulator.hpp"
-#include "uhaptics/backends/device_plants.hpp"
 #include "uhaptics/protocol/libusb_transport.hpp"
 #include "uhaptics/backends/servo_loop.hpp"
 #include "uhaptics/core/fault.hpp"

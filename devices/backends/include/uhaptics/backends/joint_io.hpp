@@ -1,7 +1,7 @@
 #pragma once
 // A device's joint I/O, whatever is behind it: the factory gives, for a device name and a backend,
 //
-//   "sim"       the device's simulated backend (device_plants.hpp), stepped by the caller;
+//   "sim"       the device's simulated plant (devices/<device>/backend), stepped by the caller;
 //   "emulated"  the same simulation behind the in-process board emulator, reached through the wire
 //               protocol by the real-time servo loop (the whole hardware path without hardware);
 //   "usb"       the device's controller board over libusb-1.0 and the servo loop.

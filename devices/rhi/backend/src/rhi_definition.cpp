@@ -3,7 +3,7 @@
 #include <limits>
 
 #include "uhaptics/backends/board_catalog.hpp"
-#include "uhaptics/backends/device_plants.hpp"
+#include "uhaptics/backends/rhi_plant.hpp"
 #include "uhaptics/models/param_file.hpp"
 #include "uhaptics/models/planar_linkage_model.hpp"
 

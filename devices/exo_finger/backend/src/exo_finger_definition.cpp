@@ -1,7 +1,7 @@
 // The finger exoskeleton module (paper 000): 1 linear actuator (l_x) and 1 sensed joint (q_B)
 // driving a 2-joint virtual finger, rendered with the subspace proxy.
 #include "uhaptics/backends/board_catalog.hpp"
-#include "uhaptics/backends/device_plants.hpp"
+#include "uhaptics/backends/exo_finger_plant.hpp"
 #include "uhaptics/models/exo_finger_model.hpp"
 #include "uhaptics/models/param_file.hpp"
 

@@ -1,7 +1,7 @@
 // The TAU-class 6-DoF parallel desktop device (paper 001): 6 actuated joints, stiff contacts
 // rendered by the LQR position-control wall.
 #include "uhaptics/backends/board_catalog.hpp"
-#include "uhaptics/backends/device_plants.hpp"
+#include "uhaptics/backends/tau_plant.hpp"
 #include "uhaptics/models/param_file.hpp"
 #include "uhaptics/models/tau_model.hpp"
 

@@ -1,0 +1,39 @@
+#pragma once
+// The finger exoskeleton's simulation as its board drives it: joints (l_x [m], q_B [rad]), actuator
+// force on l_x [N] (ExoFingerSim). Its user: the finger follows a synthesized flexion-extension
+// trajectory (position-driven, as in paper 000's Fig. 4).
+#include <memory>
+
+#include "uhaptics/backends/device_plants.hpp"
+#include "uhaptics/backends/exo_finger_sim.hpp"
+#include "uhaptics/models/exo_finger_model.hpp"
+
+namespace uhaptics {
+
+class ExoFingerBoardPlant final : public BoardPlant {
+ public:
+  struct Options {
+    double sample_rate_hz = 1000.0;   // simulation step = the board's sampling (paper 000: 1 kHz)
+    double duration_s = 600.0;        // finger trajectory length; held at its end afterwards
+    double flexion_period_s = 4.0;    // one slow flexion-extension cycle of the MCP joint
+    double trajectory_rate_hz = 200.0;  // trajectory samples (interpolated linearly in between)
+  };
+  /// Throws Error on invalid options (see ExoFingerSim, FingerTrajectory).
+  ExoFingerBoardPlant(ExoFingerModel model, const Options& options);
+
+  int jointCount() const noexcept override { return ExoFingerModel::kJoints; }
+  int actuatorCount() const noexcept override { return ExoFingerModel::kActuated; }
+  void readJoints(double* positions) noexcept override;
+  void applyCommand(const double* efforts) noexcept override;
+  void advance(double dt) noexcept override;
+
+  const ExoFingerModel& model() const noexcept { return *model_; }
+  const ExoFingerSim& sim() const noexcept { return sim_; }
+
+ private:
+  std::unique_ptr<const ExoFingerModel> model_;  // the simulation keeps a reference
+  ExoFingerSim sim_;
+  FixedStepClock clock_;
+};
+
+}  // namespace uhaptics

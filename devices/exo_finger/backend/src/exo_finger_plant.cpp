@@ -1,0 +1,29 @@
+#include "uhaptics/backends/exo_finger_plant.hpp"
+
+#include "uhaptics/core/fault.hpp"
+
+namespace uhaptics {
+
+ExoFingerBoardPlant::ExoFingerBoardPlant(ExoFingerModel model, const Options& options)
+    : model_(std::make_unique<const ExoFingerModel>(std::move(model))),
+      sim_(*model_,
+           FingerTrajectory::synthesized(*model_, options.duration_s, options.flexion_period_s,
+                                         options.trajectory_rate_hz),
+           ExoFingerSimOptions{options.sample_rate_hz, true}),
+      clock_(1.0 / options.sample_rate_hz) {}
+
+void ExoFingerBoardPlant::readJoints(double* positions) noexcept {
+  const ExoFingerState& s = sim_.state();
+  positions[0] = s.q(0);
+  positions[1] = s.q(1);
+}
+
+void ExoFingerBoardPlant::applyCommand(const double* efforts) noexcept {
+  sim_.command(ExoFingerModel::ActuatorVector::Constant(efforts[0]));
+}
+
+void ExoFingerBoardPlant::advance(double dt) noexcept {
+  for (long n = clock_.take(dt); n > 0; --n) sim_.step();
+}
+
+}  // namespace uhaptics

@@ -1,0 +1,40 @@
+#pragma once
+// The TAU's simulation as its board drives it: 6 joint angles [rad], 6 joint torques [N m]
+// (SimulatedTau). Its user: a hand modelled as a spring-damper holding the tool at the home pose
+// (paper 001's k_h, b_h).
+#include <memory>
+
+#include "uhaptics/backends/device_plants.hpp"
+#include "uhaptics/backends/simulated_tau.hpp"
+#include "uhaptics/models/tau_model.hpp"
+
+namespace uhaptics {
+
+class TauBoardPlant final : public HeldTorquePlant<6> {
+ public:
+  struct Options {
+    HandModel hand;                   // spring-damper holding the tool at the home pose
+    bool quantize = true;             // 4096-count encoders
+    // The simulated handle's rotational damping [N m s/rad], as cTauDevice's default: the hand holds
+    // only the tool's position, and the host's command arrives 1-2 sample periods after the reading
+    // it was computed from (COMMAND/STATE exchange), which the undamped orientation does not
+    // tolerate (0.38 rad in 3 s with a 1-period delay, divergence with 2; README "Hardware path").
+    double tool_rotational_damping = 0.01;
+  };
+  TauBoardPlant(TauModel model, const Options& options);
+  void advance(double dt) noexcept override;
+
+  const TauModel& model() const noexcept { return *model_; }
+  const SimulatedTau& sim() const noexcept { return sim_; }
+  /// Faults the simulation reported (forward kinematics failing: the state is then held).
+  long faults() const noexcept { return faults_; }
+
+ private:
+  const Vec6& sensed() const noexcept override { return sim_.encoderReading(); }
+  std::unique_ptr<const TauModel> model_;
+  SimulatedTau sim_;
+  FixedStepClock clock_;
+  long faults_ = 0;
+};
+
+}  // namespace uhaptics

@@ -1,0 +1,30 @@
+#include "uhaptics/backends/tau_plant.hpp"
+
+#include "uhaptics/core/fault.hpp"
+
+namespace uhaptics {
+
+namespace {
+SimulatedTauOptions tauOptions(const TauBoardPlant::Options& o) {
+  SimulatedTauOptions s;
+  s.hand = o.hand;
+  s.quantize = o.quantize;
+  s.tool_rotational_damping = o.tool_rotational_damping;
+  return s;
+}
+}  // namespace
+
+TauBoardPlant::TauBoardPlant(TauModel model, const Options& options)
+    : model_(std::make_unique<const TauModel>(std::move(model))),
+      sim_(*model_, tauOptions(options)),
+      clock_(model_->servoPeriod()) {
+  sim_.reset(model_->homeJoints());
+  sim_.setHand(model_->homePose().head<3>(), Vec3::Zero(), Vec3::Zero());
+}
+
+void TauBoardPlant::advance(double dt) noexcept {
+  for (long n = clock_.take(dt); n > 0; --n)
+    if (sim_.step(command_, Vec3::Zero()) != Fault::kNone) ++faults_;
+}
+
+}  // namespace uhaptics
