@@ -1,7 +1,8 @@
 #!/usr/bin/env python3
 """Runs CHAI3D's own examples, unchanged and relinked with the uhaptics slot, headless under Xvfb
 with each uhaptics device, and checks from the device's session statistics that the device's own
-rendering method did its work in that scene (examples.json says what each run must show).
+rendering method did its work in that scene (examples.json gives the scenes and the hand's paths;
+each device's devices/<folder>/chai3d/dropin.json what it must show in each scene).
 
   run_examples.py --bin DIR [--example NAME ...] [--device NAME ...] [--backend sim|emulated]
                   [--out DIR] [--screenshots] [--report]
@@ -11,8 +12,8 @@ Each run: the example starts with UHAPTICS_DEVICE, UHAPTICS_STATS and UHAPTICS_C
 scripted hand's path for that scene) in its environment and is ended after its time (the examples
 run until a key is pressed). With --screenshots the X display is captured once while the device
 reports contact. With --report the folder gets dropin.csv, dropin.md, reproduction.csv (for
-uhaptics-report) and summary.txt. Exit status: 0 when every run shows what examples.json expects,
-1 otherwise, 2 on a usage error or a missing program.
+uhaptics-report) and summary.txt. Exit status: 0 when every run shows what its device's
+dropin.json expects, 1 otherwise, 2 on a usage error or a missing program.
 """
 import argparse
 import csv
@@ -30,11 +31,22 @@ TABLE = os.path.join(HERE, "examples.json")
 STARTUP_GRACE = 30.0  # [s] beyond an example's time before a run counts as hung
 
 
-def load_table(path):
+def load_json(path):
     with open(path) as f:
-        table = json.load(f)
-    if table.get("format_version") != 1:
+        data = json.load(f)
+    if data.get("format_version") != 1:
         raise SystemExit(f"{path}: format_version 1 expected")
+    return data
+
+
+def load_table(path, bin_dir):
+    """The examples (examples.json) and, per registered device, what it must show in them: the build
+    writes uhaptics-devices.json (device name -> its devices/<folder>/chai3d/dropin.json)."""
+    table = load_json(path)
+    registry = os.path.join(bin_dir, "uhaptics-devices.json")
+    with open(registry) as f:
+        files = json.load(f)
+    table["devices"] = {name: load_json(rules) for name, rules in files.items()}
     return table
 
 
@@ -88,10 +100,15 @@ def read_stats(path):
         return None
 
 
-def hand_config(example, device):
+def scene_rules(table, example, device):
+    """The device's entry for this example (expect, why, hand), empty for a device without rules."""
+    return table["devices"].get(device, {}).get("scenes", {}).get(example["name"], {})
+
+
+def hand_config(table, example, device):
     """The UHAPTICS_CONFIG file content: the scripted hand's path for this scene and device."""
     hand = dict(example.get("hand", {}))
-    hand.update(example.get("hand_" + device, {}))
+    hand.update(scene_rules(table, example, device).get("hand", {}))
     waypoints = hand.pop("waypoints", None)
     config = {"device": "chai3d-selection", "format_version": 1, "hand": hand}
     if waypoints is not None:
@@ -107,7 +124,7 @@ def figure(stats, name):
 
 def check(table, example, device, stats, backend):
     """What failed (empty list: the run shows what it must), and the expectation applied."""
-    expectation = example["expect"].get(device, "engaged")
+    expectation = scene_rules(table, example, device).get("expect", "engaged")
     if stats is None:
         return ["the device wrote no statistics: the application did not open it"], expectation
     problems = []
@@ -133,7 +150,7 @@ def check(table, example, device, stats, backend):
     misses = []
     for rule in expectation.split("|"):
         missed = []
-        for name, (op, bound) in table["engagement"][device][rule].items():
+        for name, (op, bound) in table["devices"][device]["engagement"][rule].items():
             value = figure(stats, name)
             ok = (value >= bound) if op == ">=" else (value <= bound) if op == "<=" else (value == bound)
             if not ok or math.isnan(value):
@@ -154,7 +171,7 @@ def run_one(table, example, device, backend, display, out, screenshots, reject=F
         if os.path.exists(path):
             os.remove(path)
     with open(config_path, "w") as f:
-        json.dump(hand_config(example, device), f, indent=1)
+        json.dump(hand_config(table, example, device), f, indent=1)
     env = dict(os.environ, DISPLAY=display.name, UHAPTICS_DEVICE=device, UHAPTICS_BACKEND=backend,
                UHAPTICS_STATS=stats_path, UHAPTICS_CONFIG=config_path)
     seconds = ARGS.seconds if ARGS.seconds else float(example["seconds"])
@@ -259,13 +276,14 @@ def write_report(results, out, table):
         lines.append(f"| {row['example']} | {row['device']} | {row['ticks']} | {row['rate_hz']} | {row['contacts']} | "
                      f"{row['figures']} | {float(row['peak_force_N'] or 0):.2f} | "
                      f"{'' if pen == '' else f'{float(pen):.3f}'} | {row['result']} |")
-    reasons = [f"- {e['name']} with {d}: {exp[5:].strip()}" for e in table["examples"]
-               for d, exp in e["expect"].items() if exp.startswith("none:")]
+    entries = [(e["name"], d, scene_rules(table, e, d)) for e in table["examples"] for d in table["devices"]]
+    reasons = [f"- {name} with {d}: {r['expect'][5:].strip()}" for name, d, r in entries
+               if r.get("expect", "").startswith("none:")]
     if reasons:
         lines += ["", "Runs in which the device's method cannot engage, and why:"] + reasons
-    whys = [f"- {e['name']} with {d}: {why}" for e in table["examples"] for d, why in e.get("why", {}).items()]
+    whys = [f"- {name} with {d}: {r['why']}" for name, d, r in entries if "why" in r]
     if whys:
-        lines += ["", "Why a run expects the spring (TAU) or the free-motion ellipsoid (RHI):"] + whys
+        lines += ["", "Why a run expects another rule than the device's engaged one (e.g. TAU's spring, RHI's free ellipsoid):"] + whys
     reasons += whys
     with open(os.path.join(out, "dropin.md"), "w") as f:
         f.write("\n".join(lines) + "\n")
@@ -282,7 +300,7 @@ def write_report(results, out, table):
         writer.writerow(["paper", "quantity", "published", "measured", "criterion", "pass", "unit", "needs_data"])
         for r, row in zip(results, rows):
             writer.writerow(["chai3d", f"{row['example']} with {row['device']}: {r['expect']}", "nan",
-                             row["contact_ticks"] or "nan", "examples.json: " + r["expect"].split(":")[0],
+                             row["contact_ticks"] or "nan", "dropin.json: " + r["expect"].split(":")[0],
                              "pass" if not r["problems"] else "FAIL", "contact ticks", ""])
 
 
@@ -302,14 +320,14 @@ def main():
     global ARGS
     ARGS = parser.parse_args()
     ARGS.bin = os.path.abspath(ARGS.bin)
-    table = load_table(ARGS.table)
+    table = load_table(ARGS.table, ARGS.bin)
     examples = {e["name"]: e for e in table["examples"]}
     chosen = ARGS.example or list(examples)
     unknown = [e for e in chosen if e not in examples]
     if unknown:
         print(f"run_examples.py: {unknown} not in {ARGS.table} (choose from {list(examples)})", file=sys.stderr)
         return 2
-    devices = ARGS.device or list(table["engagement"])
+    devices = ARGS.device or list(table["devices"])
     os.makedirs(ARGS.out, exist_ok=True)
     results = []
     for name in chosen:
