@@ -1,5 +1,7 @@
 #include "uhaptics/chai3d/CUhapticsDevice.hpp"
 
+#include "uhaptics/backends/params_location.hpp"
+
 #include <array>
 #include <cmath>
 #include <cstdio>
@@ -55,8 +57,7 @@ void cUhapticsDevice::setCommonSpecifications(const std::string& a_modelName, bo
 }
 
 std::string cUhapticsDevice::paramsDirectory() {
-  const char* dir = std::getenv("UHAPTICS_PARAMS_DIR");
-  return dir != nullptr && *dir != '\0' ? std::string(dir) : std::string(UHAPTICS_PARAMS_DIR);
+  return uhaptics::defaultParamsDirectory();
 }
 
 double cUhapticsDevice::wallTime() const noexcept {

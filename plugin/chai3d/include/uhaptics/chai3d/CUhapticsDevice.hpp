@@ -150,7 +150,7 @@ class cUhapticsDevice : public cGenericHapticDevice {
   /// In startBackend(): throws uhaptics::Error unless the board has these joint and actuator counts,
   /// then waits (at most a_timeoutSeconds) for its first joint reading, written to a_positions.
   void startBoard(int a_joints, int a_actuators, double* a_positions, double a_timeoutSeconds = 2.0);
-  /// Folder of the device parameter files: $UHAPTICS_PARAMS_DIR, else the one this build ships.
+  /// Folder of the device parameter files: uhaptics::defaultParamsDirectory() (params_location.hpp).
   static std::string paramsDirectory();
   /// The session statistics, for subclasses to declare (constructor) and record (servoTick) the
   /// figures that show their rendering method at work.
