@@ -8,7 +8,9 @@
 #include "stress_support.hpp"
 #include "uhaptics/backends/simulated_tau.hpp"
 #include "uhaptics/core/passivity_observer.hpp"
-#include "uhaptics/renderers/tau_wall.hpp"
+#include "uhaptics/renderers/lqr_wall_renderer.hpp"
+#include "uhaptics/renderers/spring_wall_renderer.hpp"
+#include "uhaptics/renderers/tau_wall_design.hpp"
 
 using namespace uhaptics;
 

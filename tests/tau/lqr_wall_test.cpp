@@ -5,7 +5,9 @@
 #include <utility>
 
 #include "uhaptics/backends/simulated_tau.hpp"
-#include "uhaptics/renderers/tau_wall.hpp"
+#include "uhaptics/renderers/lqr_wall_renderer.hpp"
+#include "uhaptics/renderers/spring_wall_renderer.hpp"
+#include "uhaptics/renderers/tau_wall_design.hpp"
 #include "uhaptics/tools/alloc_probe.hpp"
 
 using namespace uhaptics;

@@ -8,7 +8,9 @@
 
 #include "uhaptics/backends/simulated_tau.hpp"
 #include "uhaptics/models/param_file.hpp"
-#include "uhaptics/renderers/tau_wall.hpp"
+#include "uhaptics/renderers/lqr_wall_renderer.hpp"
+#include "uhaptics/renderers/spring_wall_renderer.hpp"
+#include "uhaptics/renderers/tau_wall_design.hpp"
 
 using namespace uhaptics;
 

@@ -4,6 +4,8 @@
 
 #include "tau_study.hpp"
 #include "uhaptics/core/limits.hpp"
+#include "uhaptics/renderers/lqr_wall_renderer.hpp"
+#include "uhaptics/renderers/tau_wall_design.hpp"
 
 using namespace uhaptics;
 using namespace uhaptics::study;

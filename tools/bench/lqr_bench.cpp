@@ -8,7 +8,7 @@
 
 #include "uhaptics/core/dare.hpp"
 #include "uhaptics/core/lqr_design.hpp"
-#include "uhaptics/renderers/tau_wall.hpp"
+#include "uhaptics/renderers/tau_wall_design.hpp"
 
 using namespace uhaptics;
 

@@ -4,6 +4,7 @@
 
 #include "uhaptics/backends/board_catalog.hpp"
 #include "uhaptics/core/fault.hpp"
+#include "uhaptics/renderers/tau_wall_design.hpp"
 
 namespace uhaptics {
 namespace {

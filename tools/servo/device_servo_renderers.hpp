@@ -20,7 +20,7 @@
 #include "uhaptics/models/planar_linkage_model.hpp"
 #include "uhaptics/models/tau_model.hpp"
 #include "uhaptics/renderers/fme_null_space_controller.hpp"
-#include "uhaptics/renderers/tau_wall.hpp"
+#include "uhaptics/renderers/lqr_wall_renderer.hpp"
 #include "uhaptics/renderers/underactuated_renderers.hpp"
 
 namespace uhaptics {

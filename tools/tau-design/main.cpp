@@ -10,7 +10,7 @@
 #include <string>
 #include <vector>
 
-#include "uhaptics/renderers/tau_wall.hpp"
+#include "uhaptics/renderers/tau_wall_design.hpp"
 #include "uhaptics/tools/plot.hpp"
 
 using namespace uhaptics;

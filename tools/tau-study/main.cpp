@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "tau_study.hpp"
+#include "uhaptics/renderers/tau_wall_design.hpp"
 #include "uhaptics/tools/csv.hpp"
 #include "uhaptics/tools/parallel.hpp"
 #include "uhaptics/tools/plot.hpp"

@@ -5,6 +5,7 @@
 
 #include "uhaptics/core/limits.hpp"
 #include "uhaptics/models/tau_kinematics.hpp"
+#include "uhaptics/renderers/tau_wall_design.hpp"
 
 namespace chai3d {
 namespace {

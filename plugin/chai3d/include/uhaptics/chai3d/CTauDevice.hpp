@@ -67,7 +67,7 @@
 #include "uhaptics/backends/simulated_tau.hpp"
 #include "uhaptics/chai3d/CUhapticsDevice.hpp"
 #include "uhaptics/models/tau_model.hpp"
-#include "uhaptics/renderers/tau_wall.hpp"
+#include "uhaptics/renderers/lqr_wall_renderer.hpp"
 
 namespace chai3d {
 
