@@ -41,7 +41,7 @@ enum class Wall { kSpring, kLqr };
 /// of `plant` per servo tick.
 std::vector<double> trajectory(Wall wall, const TauModel& plant, int substeps, int plant_steps_per_tick) {
   const TauModel& m = model();
-  static const LqrWallGains gains = designLqrWall(m, m.homePose());
+  static const LqrWallGains gains = designLqrWall(m, m.homePose()).gains;
   SimulatedTauOptions so;
   so.substeps = substeps;
   so.quantize = false;

@@ -17,7 +17,7 @@ const TauModel& tauModel() {
   return m;
 }
 const LqrWallGains& tauGains() {
-  static const LqrWallGains g = designLqrWall(tauModel(), tauModel().homePose());
+  static const LqrWallGains g = designLqrWall(tauModel(), tauModel().homePose()).gains;
   return g;
 }
 // Joint readings around the contact pose, as a pressed tool produces them.

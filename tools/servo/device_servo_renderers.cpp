@@ -35,7 +35,7 @@ void ExoServoRenderer::render(const DeviceSnapshot& s, const EffortRequest& r, d
 
 TauServoRenderer::TauServoRenderer(TauModel model)
     : model_(std::make_unique<const TauModel>(std::move(model))),
-      wall_(*model_, designLqrWall(*model_, model_->homePose())) {}
+      wall_(*model_, designLqrWall(*model_, model_->homePose()).gains) {}
 
 void TauServoRenderer::render(const DeviceSnapshot& s, const EffortRequest& r, double* efforts) noexcept {
   const Vec6 q = Eigen::Map<const Vec6>(s.position.data());

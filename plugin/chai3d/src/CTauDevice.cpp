@@ -66,7 +66,7 @@ cTauDevice::cTauDevice(unsigned int a_deviceNumber, const uhaptics::DeviceSelect
   // LQR gains at the workspace centre (paper 001 linearizes at one operating point).
   uhaptics::LqrWallRenderer::Options wallOptions;
   wallOptions.keep_direction = true;
-  m_lqr = std::make_unique<uhaptics::LqrWallRenderer>(model, uhaptics::designLqrWall(model, model.homePose()), wallOptions);
+  m_lqr = std::make_unique<uhaptics::LqrWallRenderer>(model, uhaptics::designLqrWall(model, model.homePose()).gains, wallOptions);
 
   // Force the device can produce in any direction at home: tau = J^T [F; 0] within the torque
   // limits, minimized over a sphere of directions; likewise the torque.

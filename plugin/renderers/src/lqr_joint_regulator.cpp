@@ -3,10 +3,9 @@
 namespace uhaptics {
 
 void LqrJointRegulator::reset(const Vec6& q_measured) noexcept {
-  estimate_.setZero();
-  estimate_.segment<6>(6) = q_measured - gains_.observer_joints;
+  observer_.reset(q_measured);
   integral_.setZero();
-  for (Vec6& c : commands_) c = gains_.observer_torque;  // at rest, holding gravity
+  for (Vec6& c : commands_) c = gains_.observer.torque;  // at rest, holding gravity
   head_ = 0;
 }
 
@@ -28,9 +27,7 @@ void LqrJointRegulator::observe(const Vec6& q_measured, const Vec6* applied) noe
     for (int j = 1; j <= gains_.command_delay; ++j) acting += commanded(j);
     acting /= static_cast<double>(gains_.command_delay + 1);
   }
-  const Vec<18> predicted = gains_.observer_A * estimate_ + gains_.observer_B * (acting - gains_.observer_torque);
-  const Vec6 innovation = q_measured - gains_.observer_joints - predicted.segment<6>(6);
-  estimate_ = predicted + gains_.observer_gain * innovation;
+  observer_.update(q_measured, acting);
 }
 
 }  // namespace uhaptics

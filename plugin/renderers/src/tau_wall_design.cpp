@@ -12,7 +12,7 @@ namespace uhaptics {
 namespace {
 
 struct ControllerDesign {
-  LqrWallGains gains;
+  LqrWallDesign wall;
   MatX discrete_A, discrete_B;  // augmented, discretized plant (for the observer)
 };
 
@@ -27,15 +27,17 @@ ControllerDesign designController(const TauModel& model, const Vec6& operating_p
   if (command_delay < 0 || command_delay > kMaxCommandDelay)
     throw Error("designLqrWall: command delay must be in [0, " + std::to_string(kMaxCommandDelay) + "] samples");
   ControllerDesign out;
-  LqrWallGains& gains = out.gains;
-  gains.operating_pose = operating_pose;
-  if (model.inverse(operating_pose, gains.operating_joints) != Fault::kNone)
+  LqrWallGains& gains = out.wall.gains;
+  LqrWallDesignReport& report = out.wall.report;
+  report.operating_pose = operating_pose;
+  report.delay = delay;
+  if (model.inverse(operating_pose, report.operating_joints) != Fault::kNone)
     throw Error("designLqrWall: the operating pose is outside the reachable workspace");
   TauData data(model);
   data.pose = operating_pose;
-  if (model.forward(gains.operating_joints, data) != Fault::kNone)
+  if (model.forward(report.operating_joints, data) != Fault::kNone)
     throw Error("designLqrWall: forward kinematics fails at the operating pose (singular configuration)");
-  model.computeGravity(gains.operating_joints, data);
+  model.computeGravity(report.operating_joints, data);
 
   LqrDesignRequest req;
   req.dynamics = [&model, &data](const VecX& x, const VecX& u, VecX& xdot) {
@@ -44,7 +46,7 @@ ControllerDesign designController(const TauModel& model, const Vec6& operating_p
     xdot = xd;
   };
   req.x0 = VecX::Zero(12);
-  req.x0.tail(6) = gains.operating_joints;
+  req.x0.tail(6) = report.operating_joints;
   req.u0 = data.gravity;
   req.C = MatX::Zero(6, 12);
   req.C.rightCols(6).setIdentity();
@@ -62,17 +64,16 @@ ControllerDesign designController(const TauModel& model, const Vec6& operating_p
   gains.Ki = d.Ki;
   gains.command_delay = command_delay;
   gains.random_command_delay = delay.random;
-  gains.rate_weight = delay.rate_weight;
-  gains.ms_spectral_radius = d.random.mean_square_spectral_radius;
   gains.Kd.leftCols(6 * command_delay) = d.Kd;
   Eigen::PartialPivLU<Mat6> lu(gains.Ki);
   if (!(lu.rcond() > 1e-12)) throw Error("designLqrWall: integral gain is singular; bumpless entry impossible");
   gains.Ki_inverse = lu.inverse();
   gains.period = req.period;
-  gains.fastest_pole_rad_s = d.fastest_pole_rad_s;
-  gains.dare_residual = delay.random ? d.random.relative_residual : d.dare.relative_residual;
-  gains.dare_iterations = delay.random ? d.random.iterations : d.dare.iterations;
   gains.operating_torque = data.gravity;
+  report.ms_spectral_radius = d.random.mean_square_spectral_radius;
+  report.fastest_pole_rad_s = d.fastest_pole_rad_s;
+  report.dare_residual = delay.random ? d.random.relative_residual : d.dare.relative_residual;
+  report.dare_iterations = delay.random ? d.random.iterations : d.dare.iterations;
   out.discrete_A = d.discrete.A;
   out.discrete_B = d.discrete.B;
   return out;
@@ -80,19 +81,18 @@ ControllerDesign designController(const TauModel& model, const Vec6& operating_p
 
 }  // namespace
 
-LqrWallGains designLqrWall(const TauModel& model, const Vec6& operating_pose, const LqrWallWeights& w,
-                           const ObserverNoise& noise, int command_delay) {
+LqrWallDesign designLqrWall(const TauModel& model, const Vec6& operating_pose, const LqrWallWeights& w,
+                            const ObserverNoise& noise, int command_delay) {
   CommandDelayDesign delay;
   delay.samples = command_delay;
   return designLqrWall(model, operating_pose, w, noise, delay);
 }
 
-LqrWallGains designLqrWall(const TauModel& model, const Vec6& operating_pose, const LqrWallWeights& w,
-                           const ObserverNoise& noise, const CommandDelayDesign& delay) {
-  ControllerDesign design = designController(model, operating_pose, w, delay, true);
-  LqrWallGains& gains = design.gains;
-  const MatX& Ad = design.discrete_A;
-  const MatX& Bd = design.discrete_B;
+LqrWallDesign designLqrWall(const TauModel& model, const Vec6& operating_pose, const LqrWallWeights& w,
+                            const ObserverNoise& noise, const CommandDelayDesign& delay) {
+  ControllerDesign controller = designController(model, operating_pose, w, delay, true);
+  const MatX& Ad = controller.discrete_A;
+  const MatX& Bd = controller.discrete_B;
 
   // Observer on the discretized (non-augmented) plant plus a random-walk input disturbance.
   MatX Ao = MatX::Zero(18, 18), Bo = MatX::Zero(18, 6), C = MatX::Zero(6, 18);
@@ -111,29 +111,22 @@ LqrWallGains designLqrWall(const TauModel& model, const Vec6& operating_pose, co
   // Filter DARE = control DARE of the dual pair (Ao^T, C^T).
   const DareResult kf = solveDare(Ao.transpose(), C.transpose(), MatX(qn.asDiagonal()), MatX::Identity(6, 6) * sq * sq);
   const MatX S = C * kf.P * C.transpose() + MatX::Identity(6, 6) * sq * sq;
-  gains.observer_joints = gains.operating_joints;
-  gains.observer_torque = gains.operating_torque;
-  gains.observer_A = Ao;
-  gains.observer_B = Bo;
-  gains.observer_gain = kf.P * C.transpose() * S.inverse();
-  return gains;
+  JointDisturbanceObserver::Gains& observer = controller.wall.gains.observer;
+  observer.joints = controller.wall.report.operating_joints;
+  observer.torque = controller.wall.gains.operating_torque;
+  observer.A = Ao;
+  observer.B = Bo;
+  observer.gain = kf.P * C.transpose() * S.inverse();
+  return controller.wall;
 }
 
-LqrWallGains redesignLqrWallGains(const TauModel& model, const Vec6& operating_pose, const LqrWallGains& designed,
-                                  const LqrWallWeights& w) {
+LqrWallDesign redesignLqrWallGains(const TauModel& model, const Vec6& operating_pose, const LqrWallDesign& designed,
+                                   const LqrWallWeights& w) {
   // The structure (stabilizability/detectability) does not change with the operating point inside
   // the singularity-free workspace; the residual and closed-loop checks still run on every solve.
-  CommandDelayDesign delay;
-  delay.samples = designed.command_delay;
-  delay.random = designed.random_command_delay;
-  delay.rate_weight = designed.rate_weight;
-  LqrWallGains gains = designController(model, operating_pose, w, delay, false).gains;
-  gains.observer_joints = designed.observer_joints;
-  gains.observer_torque = designed.observer_torque;
-  gains.observer_A = designed.observer_A;
-  gains.observer_B = designed.observer_B;
-  gains.observer_gain = designed.observer_gain;
-  return gains;
+  LqrWallDesign out = designController(model, operating_pose, w, designed.report.delay, false).wall;
+  out.gains.observer = designed.gains.observer;
+  return out;
 }
 
 }  // namespace uhaptics

@@ -22,11 +22,8 @@ struct LqrWallWeights {
   static LqrWallWeights paper() { return {1.0, 1e3, 1e7, 1.0}; }
 };
 
-/// Steady-state Kalman filter that estimates (qdot, q, d) from the quantized encoders: joint
-/// velocity cannot be differentiated from 4096-count encoders (one count per servo period is
-/// 1.5 rad/s, which the LQR's velocity gain would turn into newton-metres of noise). d is an input
-/// disturbance torque (the user's force through J^T), modelled as a random walk, so that a steady
-/// push does not bias the velocity estimate.
+/// Noise levels the observer (JointDisturbanceObserver: qdot, q and the disturbance torque d from
+/// the quantized encoders) is designed for.
 struct ObserverNoise {
   double velocity_process = 1e-3;  // rad/s per sample (unmodelled accelerations)
   // N m per sample: how fast the user's push may change. Measured against 0.005 (README, TAU
@@ -44,26 +41,43 @@ struct CommandDelayDesign {
   double rate_weight = 0.0;  // weight on (u_k - u_{k-1})^2 per joint, (N m)^-2 (random model only)
 };
 
+/// What a wall design reports besides the gains: the point it was made at, the delay model, and
+/// the checks on the synthesis. Nothing here is read at run time.
+struct LqrWallDesignReport {
+  Vec6 operating_pose = Vec6::Zero();
+  Vec6 operating_joints = Vec6::Zero();
+  CommandDelayDesign delay;          // the delay model designed for (a gain-only redesign keeps it)
+  double fastest_pole_rad_s = 0.0;   // |s| of the fastest closed-loop pole (paper 001: ~2480 rad/s)
+  double dare_residual = 0.0;        // relative residual of the control DARE (random delay: generalized Riccati)
+  int dare_iterations = 0;
+  double ms_spectral_radius = 0.0;   // mean-square closed-loop radius of the random-delay design (< 1: stable)
+};
+
+struct LqrWallDesign {
+  LqrWallGains gains;  // what the regulator runs on
+  LqrWallDesignReport report;
+};
+
 /// Linearize the model at the operating pose (at rest, holding gravity), augment with integrators,
 /// ZOH-discretize at the model's servo period, augment with `command_delay` commands in flight
 /// (0..kMaxCommandDelay; 0: the undelayed design), solve the DARE, split the gain; then design the
 /// steady-state Kalman observer on the same discretized plant (a second DARE; it is fed the command
 /// that reaches the plant under that delay). Throws Error (e.g. unreachable pose, failed DARE).
 /// Set-up code.
-LqrWallGains designLqrWall(const TauModel& model, const Vec6& operating_pose, const LqrWallWeights& weights = {},
-                           const ObserverNoise& noise = {}, int command_delay = 0);
+LqrWallDesign designLqrWall(const TauModel& model, const Vec6& operating_pose, const LqrWallWeights& weights = {},
+                            const ObserverNoise& noise = {}, int command_delay = 0);
 /// The same with an explicit delay model (fixed or i.i.d. random, with an input-rate weight).
-LqrWallGains designLqrWall(const TauModel& model, const Vec6& operating_pose, const LqrWallWeights& weights,
-                           const ObserverNoise& noise, const CommandDelayDesign& delay);
+LqrWallDesign designLqrWall(const TauModel& model, const Vec6& operating_pose, const LqrWallWeights& weights,
+                            const ObserverNoise& noise, const CommandDelayDesign& delay);
 
 /// Gain-only redesign at a new operating pose (e.g. each new contact point), fast enough for one
-/// servo period: linearize + augment + ZOH + DARE + gain, for the command delay `designed` was made
+/// servo period: linearize + augment + ZOH + DARE + gain, for the delay model `designed` was made
 /// for; the observer is copied from `designed`.
 /// Why the observer need not follow: it only predicts one period ahead, its disturbance state d
 /// absorbs the model mismatch between operating points, and its gain is set by the encoder noise,
 /// not by the contact point (tests/tau: the centre's observer stays stable on the plant linearized
 /// at the wall corners). Throws Error like designLqrWall.
-LqrWallGains redesignLqrWallGains(const TauModel& model, const Vec6& operating_pose, const LqrWallGains& designed,
-                                  const LqrWallWeights& weights = {});
+LqrWallDesign redesignLqrWallGains(const TauModel& model, const Vec6& operating_pose, const LqrWallDesign& designed,
+                                   const LqrWallWeights& weights = {});
 
 }  // namespace uhaptics
