@@ -8,7 +8,9 @@
 #include "stress_support.hpp"
 #include "uhaptics/backends/simulated_tau.hpp"
 #include "uhaptics/core/passivity_observer.hpp"
-#include "uhaptics/renderers/tau_wall.hpp"
+#include "uhaptics/renderers/lqr_wall_renderer.hpp"
+#include "uhaptics/renderers/spring_wall_renderer.hpp"
+#include "uhaptics/renderers/tau_wall_design.hpp"
 
 using namespace uhaptics;
 
@@ -117,17 +119,18 @@ TEST_CASE("TAU walls: random, out-of-range, non-finite and singular states, surf
     for (int i = 0; i < 3; ++i) op(i) += src.uniform(-1.5, 1.5) * model().workspaceHalfSide();
     for (int i = 3; i < 6; ++i) op(i) += src.uniform(-1.5, 1.5) * model().workspaceHalfAngle();
     ++designs;
-    LqrWallGains gains;
+    LqrWallDesign design;
     try {
-      gains = designLqrWall(model(), op, weights);
+      design = designLqrWall(model(), op, weights);
     } catch (const Error&) {
       ++refused_designs;  // a clear refusal at set-up is an allowed answer
       continue;
     }
     // A design that returns must be a verified one, not a silent wrong answer.
+    const LqrWallGains& gains = design.gains;
     CHECK(gains.Kc.allFinite());
     CHECK(gains.Ki.allFinite());
-    CHECK(gains.dare_residual <= 1e-8);
+    CHECK(design.report.dare_residual <= 1e-8);
     LqrWallRenderer a(model(), gains);
     LqrWallRenderer b(model(), gains, LqrWallRenderer::Options{2e-4, true, false, false});
     hammer(a, src, episodes, ticks, lqr);
@@ -177,7 +180,7 @@ TEST_CASE("TAU LQR wall recovers after adversarial readings: a glitch never leav
   // A faulting tick must leave no poisoned state behind (observer estimate, integrator): once
   // the readings are sane again the wall renders.
   stress::AdversarialSource src(99);
-  const LqrWallGains gains = designLqrWall(model(), model().homePose());
+  const LqrWallGains gains = designLqrWall(model(), model().homePose()).gains;
   LqrWallRenderer r(model(), gains);
   const Vec6 q0 = model().homeJoints();
   SurfaceContact c;
@@ -310,7 +313,7 @@ TEST_CASE("TAU energy: the spring wall with the device damping generates no ener
   SpringWallRenderer damped(model(), o), undamped(model(), o);
   const EnergyRun with_b = interact(damped, 4.0, o.stiffness, seconds, 1);
   const EnergyRun without_b = interact(undamped, 0.0, o.stiffness, seconds, 1);
-  const LqrWallGains gains = designLqrWall(model(), model().homePose());
+  const LqrWallGains gains = designLqrWall(model(), model().homePose()).gains;
   LqrWallRenderer lqr(model(), gains), lqr_undamped(model(), gains);
   const EnergyRun lqr_run = interact(lqr, 4.0, 0.0, seconds, 1);
   const EnergyRun lqr_undamped_run = interact(lqr_undamped, 0.0, 0.0, seconds, 1);

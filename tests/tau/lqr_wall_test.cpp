@@ -5,7 +5,9 @@
 #include <utility>
 
 #include "uhaptics/backends/simulated_tau.hpp"
-#include "uhaptics/renderers/tau_wall.hpp"
+#include "uhaptics/renderers/lqr_wall_renderer.hpp"
+#include "uhaptics/renderers/spring_wall_renderer.hpp"
+#include "uhaptics/renderers/tau_wall_design.hpp"
 #include "uhaptics/tools/alloc_probe.hpp"
 
 using namespace uhaptics;
@@ -15,10 +17,11 @@ const TauModel& model() {
   static const TauModel m = TauModel::load(std::string(UHAPTICS_PARAMS_DIR) + "/tau.json");
   return m;
 }
-const LqrWallGains& gains() {
-  static const LqrWallGains g = designLqrWall(model(), model().homePose());
-  return g;
+const LqrWallDesign& design() {
+  static const LqrWallDesign d = designLqrWall(model(), model().homePose());
+  return d;
 }
+const LqrWallGains& gains() { return design().gains; }
 SurfaceContact wallAt(const Vec6& pose) {
   SurfaceContact c;
   c.active = true;
@@ -30,15 +33,16 @@ SurfaceContact wallAt(const Vec6& pose) {
 
 TEST_CASE("LQR wall design: fastest pole ~2480 rad/s, verified DARE, stable observer") {
   const LqrWallGains& g = gains();
+  const LqrWallDesignReport& report = design().report;
   // Paper: "around 2480 rad/s"; our weights are tuned for our assumed plant to keep it there.
-  CHECK(g.fastest_pole_rad_s == Approx(2480.0).epsilon(0.05));
-  CHECK(g.dare_residual < 1e-10);
+  CHECK(report.fastest_pole_rad_s == Approx(2480.0).epsilon(0.05));
+  CHECK(report.dare_residual < 1e-10);
   CHECK(g.Kc.allFinite());
   CHECK((g.Ki * g.Ki_inverse - Mat6::Identity()).norm() < 1e-9);
   // The observer must be stable: the estimation error dynamics (I - L C) A have |z| < 1.
   Mat<6, 18> C = Mat<6, 18>::Zero();
   C.block<6, 6>(0, 6).setIdentity();
-  const Mat<18, 18> E = (Mat<18, 18>::Identity() - g.observer_gain * C) * g.observer_A;
+  const Mat<18, 18> E = (Mat<18, 18>::Identity() - g.observer.gain * C) * g.observer.A;
   CHECK(E.eigenvalues().cwiseAbs().maxCoeff() < 1.0);
 }
 
@@ -51,16 +55,16 @@ TEST_CASE("Gain-only redesign at a contact point: same controller as a full desi
     Vec6 corner = model().homePose();
     corner(0) = x;
     corner(1) = y;
-    const LqrWallGains full = designLqrWall(model(), corner);
-    const LqrWallGains quick = redesignLqrWallGains(model(), corner, centre);
+    const LqrWallGains full = designLqrWall(model(), corner).gains;
+    const LqrWallGains quick = redesignLqrWallGains(model(), corner, design()).gains;
     // Same DARE, same inputs: identical up to the solver's rounding.
     CHECK((quick.Kc - full.Kc).norm() < 1e-9 * full.Kc.norm());
     CHECK((quick.Ki - full.Ki).norm() < 1e-9 * full.Ki.norm());
-    CHECK(quick.observer_gain == centre.observer_gain);
-    CHECK(quick.observer_joints == centre.observer_joints);
+    CHECK(quick.observer.gain == centre.observer.gain);
+    CHECK(quick.observer.joints == centre.observer.joints);
     // Why the observer may stay: the centre's filter is still stable on the corner's plant, i.e.
     // the estimation error e+ = (I - L C) A_corner e contracts (A_corner from the corner's design).
-    const Mat<18, 18> E = (Mat<18, 18>::Identity() - centre.observer_gain * C) * full.observer_A;
+    const Mat<18, 18> E = (Mat<18, 18>::Identity() - centre.observer.gain * C) * full.observer.A;
     CHECK(E.eigenvalues().cwiseAbs().maxCoeff() < 1.0);
   }
 }
@@ -72,7 +76,7 @@ TEST_CASE("LQR wall design rejects unreachable operating points with a clear err
   LqrWallWeights w;
   w.torque = 0.0;
   CHECK_THROWS_AS(designLqrWall(model(), model().homePose(), w), Error);
-  CHECK_THROWS_WITH(redesignLqrWallGains(model(), far, gains()), Catch::Contains("outside the reachable workspace"));
+  CHECK_THROWS_WITH(redesignLqrWallGains(model(), far, design()), Catch::Contains("outside the reachable workspace"));
 }
 
 TEST_CASE("Bad input to the wall renderers: a Fault and a zero torque, never NaN") {

@@ -8,7 +8,9 @@
 
 #include "uhaptics/backends/simulated_tau.hpp"
 #include "uhaptics/models/param_file.hpp"
-#include "uhaptics/renderers/tau_wall.hpp"
+#include "uhaptics/renderers/lqr_wall_renderer.hpp"
+#include "uhaptics/renderers/spring_wall_renderer.hpp"
+#include "uhaptics/renderers/tau_wall_design.hpp"
 
 using namespace uhaptics;
 
@@ -39,7 +41,7 @@ enum class Wall { kSpring, kLqr };
 /// of `plant` per servo tick.
 std::vector<double> trajectory(Wall wall, const TauModel& plant, int substeps, int plant_steps_per_tick) {
   const TauModel& m = model();
-  static const LqrWallGains gains = designLqrWall(m, m.homePose());
+  static const LqrWallGains gains = designLqrWall(m, m.homePose()).gains;
   SimulatedTauOptions so;
   so.substeps = substeps;
   so.quantize = false;

@@ -4,6 +4,8 @@
 
 #include "tau_study.hpp"
 #include "uhaptics/core/limits.hpp"
+#include "uhaptics/renderers/lqr_wall_renderer.hpp"
+#include "uhaptics/renderers/tau_wall_design.hpp"
 
 using namespace uhaptics;
 using namespace uhaptics::study;
@@ -14,7 +16,7 @@ const TauModel& model() {
   return m;
 }
 const LqrWallGains& gains() {
-  static const LqrWallGains g = designLqrWall(model(), model().homePose());
+  static const LqrWallGains g = designLqrWall(model(), model().homePose()).gains;
   return g;
 }
 }  // namespace
@@ -141,9 +143,10 @@ TEST_CASE("Random 0-3 sample command delay: the random-delay design holds the wa
   random_delay.samples = 3;
   random_delay.random = true;
   random_delay.rate_weight = 200.0;
-  static const LqrWallGains delay_gains = designLqrWall(model(), model().homePose(), {}, {}, random_delay);
+  static const LqrWallDesign delay_design = designLqrWall(model(), model().homePose(), {}, {}, random_delay);
+  const LqrWallGains& delay_gains = delay_design.gains;
   REQUIRE(delay_gains.random_command_delay);
-  CHECK(delay_gains.ms_spectral_radius < 1.0);  // mean-square stable under the random delay
+  CHECK(delay_design.report.ms_spectral_radius < 1.0);  // mean-square stable under the random delay
   const double c = model().workspaceHalfSide();
   double pen = 0.0, steady_told = 0.0, steady_guessed = 0.0;
   int faults_delay_aware = 0, faults_undelayed = 0;

@@ -8,7 +8,7 @@
 
 #include "uhaptics/core/dare.hpp"
 #include "uhaptics/core/lqr_design.hpp"
-#include "uhaptics/renderers/tau_wall.hpp"
+#include "uhaptics/renderers/tau_wall_design.hpp"
 
 using namespace uhaptics;
 
@@ -85,13 +85,13 @@ BENCHMARK(BM_DareRiccatiRecursion)->Iterations(1)->Unit(benchmark::kMillisecond)
 // (residual and closed-loop checks on) + gain; the observer is kept from the initial design.
 static void BM_TauRedesign(benchmark::State& state) {
   static const TauModel model = TauModel::load(std::string(UHAPTICS_PARAMS_DIR) + "/tau.json");
-  static const LqrWallGains designed = designLqrWall(model, model.homePose());
+  static const LqrWallDesign designed = designLqrWall(model, model.homePose());
   Vec6 pose = model.homePose();
   pose(0) = 0.01;
   pose(1) = -0.01;
   for (auto _ : state) {
-    const LqrWallGains g = redesignLqrWallGains(model, pose, designed);
-    benchmark::DoNotOptimize(g.Kc.data());
+    const LqrWallDesign g = redesignLqrWallGains(model, pose, designed);
+    benchmark::DoNotOptimize(g.gains.Kc.data());
   }
 }
 BENCHMARK(BM_TauRedesign)->Unit(benchmark::kMicrosecond);
@@ -100,8 +100,8 @@ BENCHMARK(BM_TauRedesign)->Unit(benchmark::kMicrosecond);
 static void BM_TauFullDesign(benchmark::State& state) {
   static const TauModel model = TauModel::load(std::string(UHAPTICS_PARAMS_DIR) + "/tau.json");
   for (auto _ : state) {
-    const LqrWallGains g = designLqrWall(model, model.homePose());
-    benchmark::DoNotOptimize(g.Kc.data());
+    const LqrWallDesign g = designLqrWall(model, model.homePose());
+    benchmark::DoNotOptimize(g.gains.Kc.data());
   }
 }
 BENCHMARK(BM_TauFullDesign)->Unit(benchmark::kMicrosecond);

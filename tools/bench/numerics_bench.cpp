@@ -15,7 +15,7 @@
 #include "uhaptics/core/lqr_design.hpp"
 #include "uhaptics/models/param_file.hpp"
 #include "uhaptics/models/tau_model.hpp"
-#include "uhaptics/renderers/tau_wall.hpp"
+#include "uhaptics/renderers/tau_wall_design.hpp"
 
 namespace {
 using namespace uhaptics;

@@ -3,7 +3,9 @@
 #include <benchmark/benchmark.h>
 
 #include "uhaptics/backends/simulated_tau.hpp"
-#include "uhaptics/renderers/tau_wall.hpp"
+#include "uhaptics/renderers/lqr_wall_renderer.hpp"
+#include "uhaptics/renderers/spring_wall_renderer.hpp"
+#include "uhaptics/renderers/tau_wall_design.hpp"
 #include "uhaptics/tools/alloc_probe.hpp"
 #include "tau_study.hpp"
 
@@ -15,7 +17,7 @@ const TauModel& tauModel() {
   return m;
 }
 const LqrWallGains& tauGains() {
-  static const LqrWallGains g = designLqrWall(tauModel(), tauModel().homePose());
+  static const LqrWallGains g = designLqrWall(tauModel(), tauModel().homePose()).gains;
   return g;
 }
 // Joint readings around the contact pose, as a pressed tool produces them.

@@ -10,7 +10,7 @@
 #include <string>
 #include <vector>
 
-#include "uhaptics/renderers/tau_wall.hpp"
+#include "uhaptics/renderers/tau_wall_design.hpp"
 #include "uhaptics/tools/plot.hpp"
 
 using namespace uhaptics;
@@ -45,7 +45,9 @@ int main(int argc, char** argv) {
     LqrWallWeights w{weights[0], weights[1], weights[2], weights[3]};
     const Vec6 op = Eigen::Map<const Vec6>(pose.data());
     const auto t0 = std::chrono::steady_clock::now();
-    const LqrWallGains g = designLqrWall(model, op, w);
+    const LqrWallDesign design = designLqrWall(model, op, w);
+    const LqrWallGains& g = design.gains;
+    const LqrWallDesignReport& report = design.report;
     const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
     const auto slash = out.find_last_of('/');
     if (slash != std::string::npos) tools::ensureDirectory(out.substr(0, slash));
@@ -54,17 +56,17 @@ int main(int argc, char** argv) {
     os << std::setprecision(17) << "{\n  \"device\": \"tau\",\n  \"parameters\": \"" << params << "\",\n";
     os << "  \"weights\": {\"velocity\": " << w.velocity << ", \"position\": " << w.position
        << ", \"integral\": " << w.integral << ", \"torque\": " << w.torque << "},\n";
-    os << "  \"period\": " << g.period << ",\n  \"fastest_pole_rad_s\": " << g.fastest_pole_rad_s
-       << ",\n  \"dare_relative_residual\": " << g.dare_residual << ",\n";
-    writeMatrix(os, "operating_pose", g.operating_pose.transpose());
-    writeMatrix(os, "operating_joints", g.operating_joints.transpose());
+    os << "  \"period\": " << g.period << ",\n  \"fastest_pole_rad_s\": " << report.fastest_pole_rad_s
+       << ",\n  \"dare_relative_residual\": " << report.dare_residual << ",\n";
+    writeMatrix(os, "operating_pose", report.operating_pose.transpose());
+    writeMatrix(os, "operating_joints", report.operating_joints.transpose());
     writeMatrix(os, "operating_torque", g.operating_torque.transpose());
     writeMatrix(os, "Kc", g.Kc);
     writeMatrix(os, "Ki", g.Ki);
-    writeMatrix(os, "observer_gain", g.observer_gain, true);
+    writeMatrix(os, "observer_gain", g.observer.gain, true);
     os << "}\n";
     std::printf("designed in %.2f ms: fastest closed-loop pole %.0f rad/s, DARE residual %.1e (%d doublings) -> %s\n", ms,
-                g.fastest_pole_rad_s, g.dare_residual, g.dare_iterations, out.c_str());
+                report.fastest_pole_rad_s, report.dare_residual, report.dare_iterations, out.c_str());
     return 0;
   } catch (const std::exception& e) {
     std::fprintf(stderr, "uhaptics-tau-design: %s\n", e.what());

@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "tau_study.hpp"
+#include "uhaptics/renderers/tau_wall_design.hpp"
 #include "uhaptics/tools/csv.hpp"
 #include "uhaptics/tools/parallel.hpp"
 #include "uhaptics/tools/plot.hpp"
@@ -132,7 +133,8 @@ int main(int argc, char** argv) {
     LqrWallWeights weights;  // tuned for our plant (README); --paper-weights for paper 001's own
     if (paper_weights) weights = LqrWallWeights::paper();
     if (!weight_list.empty()) weights = {weight_list[0], weight_list[1], weight_list[2], weight_list[3]};
-    const LqrWallGains gains = designLqrWall(model, model.homePose(), weights);
+    const LqrWallDesign design = designLqrWall(model, model.homePose(), weights);
+    const LqrWallGains& gains = design.gains;
     LqrWallWeights delay_weights = weights;
     if (!delay_weight_list.empty())
       delay_weights = {delay_weight_list[0], delay_weight_list[1], delay_weight_list[2], delay_weight_list[3]};
@@ -144,18 +146,19 @@ int main(int argc, char** argv) {
     ObserverNoise delay_noise;
     if (!delay_observer.empty())
       delay_noise = {delay_observer[0], delay_observer[1], delay_observer[2], delay_observer[3]};
-    const LqrWallGains delay_gains = designLqrWall(model, model.homePose(), delay_weights, delay_noise, delay_model);
+    const LqrWallDesign delay_wall = designLqrWall(model, model.homePose(), delay_weights, delay_noise, delay_model);
+    const LqrWallGains& delay_gains = delay_wall.gains;
     if (delay_model.random)
       std::printf("random-delay design (d ~ U{0..%d}, rate weight %g): generalized Riccati %d steps, residual %.1e, "
                   "mean-square radius %.4f (state feedback)\n",
-                  delay_design, delay_model.rate_weight, delay_gains.dare_iterations, delay_gains.dare_residual,
-                  delay_gains.ms_spectral_radius);
+                  delay_design, delay_model.rate_weight, delay_wall.report.dare_iterations, delay_wall.report.dare_residual,
+                  delay_wall.report.ms_spectral_radius);
     const double design_ms =
         std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t_design).count();
     std::printf("LQR design at the workspace centre, Q = diag(%g I, %g I, %g I), R = %g I: fastest pole %.0f rad/s, "
                 "DARE residual %.1e (%d doublings), %.2f ms\n",
-                weights.velocity, weights.position, weights.integral, weights.torque, gains.fastest_pole_rad_s,
-                gains.dare_residual, gains.dare_iterations, design_ms);
+                weights.velocity, weights.position, weights.integral, weights.torque, design.report.fastest_pole_rad_s,
+                design.report.dare_residual, design.report.dare_iterations, design_ms);
 
     // Requirement checks of paper 001 section III at the workspace centre: on the design (state
     // feedback, ideal sensor) as the paper checks them, plus the force step as the device runs it,
@@ -243,8 +246,8 @@ int main(int argc, char** argv) {
     const double lqr_kz1_low = extreme_min[0], spring_kz1_high = extreme_max[2];
     const double lqr_kzs1_low = extreme_min[1], spring_kzs1_high = extreme_max[3];
     const double lqr_kzs2_low = extreme_min[5], spring_kzs2_high = extreme_max[7];
-    table.add({"001", "fastest closed-loop pole", 2480.0, gains.fastest_pole_rad_s, "within 10 %",
-               std::abs(gains.fastest_pole_rad_s - 2480.0) <= 248.0, "rad/s"});
+    table.add({"001", "fastest closed-loop pole", 2480.0, design.report.fastest_pole_rad_s, "within 10 %",
+               std::abs(design.report.fastest_pole_rad_s - 2480.0) <= 248.0, "rad/s"});
     table.add({"001", "sc.1 lowest K_z1, LQR", 17174.0, lqr_kz1_low, ">= 3x highest spring K_z1 (paper 5.5x)",
                lqr_kz1_low >= 3.0 * spring_kz1_high, "N/m"});
     table.add({"001", "sc.1 highest K_z1, spring", 3112.6, spring_kz1_high, "within 30 % (device mass differs)",

@@ -6,6 +6,9 @@
 #include <random>
 #include <utility>
 
+#include "uhaptics/renderers/lqr_wall_renderer.hpp"
+#include "uhaptics/renderers/spring_wall_renderer.hpp"
+
 namespace uhaptics::study {
 
 const char* name(Controller c) { return c == Controller::kLqr ? "lqr" : "spring"; }

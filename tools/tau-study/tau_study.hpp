@@ -7,7 +7,7 @@
 #include <vector>
 
 #include "uhaptics/backends/simulated_tau.hpp"
-#include "uhaptics/renderers/tau_wall.hpp"
+#include "uhaptics/renderers/lqr_joint_regulator.hpp"
 
 namespace uhaptics::study {
 

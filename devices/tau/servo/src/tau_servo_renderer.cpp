@@ -2,7 +2,8 @@
 // compensation with the observer running.
 #include "device_servo_renderers.hpp"
 #include "uhaptics/models/tau_model.hpp"
-#include "uhaptics/renderers/tau_wall.hpp"
+#include "uhaptics/renderers/lqr_wall_renderer.hpp"
+#include "uhaptics/renderers/tau_wall_design.hpp"
 
 namespace uhaptics::devices::tau {
 namespace {
@@ -11,7 +12,7 @@ class TauServoRenderer final : public DeviceServoRenderer {
  public:
   explicit TauServoRenderer(TauModel model)
       : model_(std::make_unique<const TauModel>(std::move(model))),
-        wall_(*model_, designLqrWall(*model_, model_->homePose())) {}
+        wall_(*model_, designLqrWall(*model_, model_->homePose()).gains) {}
 
   void render(const DeviceSnapshot& s, const EffortRequest& r, double* efforts) noexcept override {
     const Vec6 q = Eigen::Map<const Vec6>(s.position.data());

@@ -1,0 +1,265 @@
+#include "uhaptics/renderers/tau_contact_classifier.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+#include "uhaptics/core/fault.hpp"
+
+namespace uhaptics {
+
+namespace {
+
+// Depth the tool must travel into a contact before its stiffness is estimated: four encoder counts
+// at the tool (about 0.05 mm each), so quantization does not fake a stiff surface.
+constexpr double kProbeDepth = 2e-4;  // m
+// Below this force the application's force says nothing about its surface: the session
+// statistics' contact threshold, 8 um of depth at 6000 N/m.
+constexpr double kTrackForce = 0.05;  // N
+// The application force the wall keeps: its plane lies kHoldForce / k under the proxy, so a held
+// tool stays inside the application's surface and its force keeps saying where that surface is
+// (held on the proxy's own surface, the LQR's integral action would bring that force to zero, and
+// the plane could no longer follow). 0.1 mm at 4800 N/m, a tenth of the paper's 1 mm bound; above
+// contact_force, so the application's own contact does not flicker; and above the jitter of CHAI3D's
+// proxy (its epsilon, 1e-4 world units: 0.6 N at 6000 N/m in a world in device units).
+constexpr double kHoldForce = 0.5;  // N
+// The normal turns toward the application's force (friction removed) with these gains per new
+// force. Along the proxy's path (a surface curving under a sliding proxy): kPathGain, 20 ms, which
+// lags a tool sliding at 15 mm/s over a 15 mm radius by 1 deg. Otherwise: kSlowGain, 200 ms, so a
+// tool rocking across a concave edge does not swing the wall with it (the faces' forces across the
+// wall's normal are rendered by the spring meanwhile) and the proxy's jitter averages out. While
+// probing, before the wall holds anything: kProbeGain, 10 ms.
+constexpr double kPathGain = 0.05;
+constexpr double kSlowGain = 0.005;
+constexpr double kProbeGain = 0.1;
+// The proxy's path: the chord over this length of it (long against the proxy's jitter, short
+// against curvature: the chord of a 15 mm radius is 1 deg off its tangent).
+constexpr double kChord = 5e-4;  // m
+// The plane's offset along its normal follows the proxy with this gain per new force (5 ms), and
+// at most 50 mm/s (twice a brisk hand): a proxy jumping across a mesh's thin feature gives the LQR a
+// ramp, not a step.
+constexpr double kOffsetGain = 0.2;
+constexpr double kPlaneStep = 5e-5;  // m per tick
+// While the wall holds the tool and the application feels no contact, the plane sinks this fast
+// until it does (past a convex crest the real surface falls away below the plane).
+constexpr double kCreepSpeed = 0.01;  // m/s
+// The wall's command saturated this long without a break: the device cannot hold the contact
+// there; the spring (scaled into the torque limits) takes the contact over.
+constexpr int kOverloadTicks = 20;
+
+}  // namespace
+
+TauContactClassifier::TauContactClassifier(const Options& options) : options_(options) {
+  const auto positive = [](double v) { return v > 0.0 && std::isfinite(v); };
+  if (!positive(options.stiff_threshold)) throw Error("TauContactClassifier: stiff_threshold must be finite and > 0");
+  if (!positive(options.contact_force)) throw Error("TauContactClassifier: contact_force must be finite and > 0");
+  if (options.release_ticks < 1) throw Error("TauContactClassifier: release_ticks must be >= 1");
+  if (!positive(options.nominal_stiffness))
+    throw Error("TauContactClassifier: nominal_stiffness must be finite and > 0");
+  if (!positive(options.servo_period)) throw Error("TauContactClassifier: servo_period must be finite and > 0");
+  reset();
+}
+
+void TauContactClassifier::reset() noexcept {
+  events_ = Events{};
+  state_ = State::kFree;
+  held_ = false;
+  entry_depth_ = 0.0;
+  quiet_ticks_ = 0;
+  last_force_.setZero();
+  last_position_.setZero();
+  frames_ticks_ = 0;
+  overload_ticks_ = 0;
+  probe_force_ = 0.0;
+  probe_depth_ = 0.0;
+  stiffness_ = 0.0;
+  normal_ = Vec3::UnitZ();
+  proxy_.setZero();
+  has_proxy_ = false;
+  trail_head_ = 0;
+  trail_count_ = 0;
+  surface_ = SurfaceContact{};
+}
+
+void TauContactClassifier::release() noexcept {
+  if (state_ == State::kLqr) events_.released = true;
+  state_ = State::kFree;
+  surface_.active = false;
+}
+
+bool TauContactClassifier::endContact() noexcept {
+  const bool released = state_ == State::kLqr;
+  state_ = State::kFree;
+  held_ = false;
+  surface_.active = false;
+  return released;
+}
+
+double TauContactClassifier::perTick(double gain) const noexcept {
+  // The filters' gains are per servo tick; an application slower than the servo sends a new force
+  // every few ticks, and each then counts for all of them (time constants in time, not in frames).
+  return frames_ticks_ <= 1 ? gain : 1.0 - std::pow(1.0 - gain, std::min(frames_ticks_, 50));
+}
+
+void TauContactClassifier::trackSurface(const Vec3& force, const Vec3& position, double stiffness,
+                                        double turn_gain) noexcept {
+  // A force below kTrackForce, or one pointing into the surface (proxy jitter), is no evidence.
+  const double magnitude = force.norm();
+  if (!(magnitude >= kTrackForce) || !(force.dot(normal_) > 0.0)) {
+    has_proxy_ = false;
+    return;
+  }
+  // The application's proxy: its force is F = k (proxy - tool).
+  proxy_ = position + force / stiffness;
+  has_proxy_ = true;
+  trail_head_ = (trail_head_ + 1) % kTrailLength;
+  trail_[trail_head_] = proxy_;
+  trail_count_ = std::min(trail_count_ + 1, kTrailLength);
+  // The proxy's path: the chord back to where it was kChord ago, if that is in the trail (a proxy
+  // that moved less is stuck by static friction, or stopped in a concave edge).
+  Vec3 path = Vec3::Zero();
+  for (int i = 1; i < trail_count_; ++i) {
+    const Vec3 travel = proxy_ - trail_[(trail_head_ + kTrailLength - i) % kTrailLength];
+    const double length = travel.norm();
+    if (length >= kChord) {
+      path = travel / length;
+      break;
+    }
+  }
+  // Friction: CHAI3D's finger proxy, slipping, sits on its friction cone's rim on the way to the
+  // tool, so its tangential force points against its own motion, which lies in the surface (normal
+  // to it). F's component along the path is that friction and is removed; what is left is normal to
+  // the path, as the surface normal is. A stuck proxy's F is tilted by at most atan(mu_s), and only
+  // the slow gain turns the normal toward it.
+  const Vec3 normal_force = force - force.dot(path) * path;
+  const double length = normal_force.norm();
+  if (!(length > 0.0)) return;
+  const Vec3 turn = normal_force / length - normal_;
+  const Vec3 along_path = turn.dot(path) * path;  // = -(n . path) path: geometry, not F
+  const double weight = std::min(1.0, length / kHoldForce);  // a small force counts in proportion
+  const Vec3 normal = normal_ + perTick(kPathGain) * along_path + weight * perTick(turn_gain) * (turn - along_path);
+  const double norm = normal.norm();
+  if (norm > 1e-9 && std::isfinite(norm)) normal_ = normal / norm;
+}
+
+void TauContactClassifier::startContact(const Vec3& force, WallMode mode) noexcept {
+  state_ = mode == WallMode::kSpring ? State::kSpring : State::kProbing;
+  normal_ = force.normalized();
+  has_proxy_ = false;
+  trail_count_ = 0;
+  probe_force_ = 0.0;
+  probe_depth_ = 0.0;
+  quiet_ticks_ = 0;
+}
+
+void TauContactClassifier::update(const Vec3& force_in, const Vec3& position_in, WallMode mode) noexcept {
+  events_ = Events{};
+  const bool finite = force_in.allFinite() && position_in.allFinite();
+  const Vec3 force = finite ? force_in : Vec3::Zero();
+  const Vec3 position = finite ? position_in : last_position_;
+  const double magnitude = force.norm();
+  // A force the application has not sent before was computed from the position it read last; a
+  // repeated one is older and says nothing new.
+  const bool fresh = (force.array() != last_force_.array()).any();
+  // Servo ticks since the last new force, this one included, counted while that force was a
+  // contact (a force that stayed zero held no information to wait for).
+  frames_ticks_ = last_force_.norm() >= kTrackForce ? frames_ticks_ + 1 : 1;
+
+  if (state_ == State::kFree) {
+    if (magnitude > options_.contact_force && std::isfinite(magnitude)) startContact(force, mode);
+  } else {
+    if (mode == WallMode::kSpring && state_ != State::kSpring) {
+      release();  // switched to the spring mid-contact
+      state_ = State::kSpring;
+    }
+    // Out of contact: the wall does not hold the tool and the application feels (almost) nothing;
+    // or the wall holds it where the application feels nothing at all (a plane above its surface).
+    const bool out = held_ ? magnitude < kTrackForce : magnitude < 0.5 * options_.contact_force;
+    quiet_ticks_ = out ? quiet_ticks_ + 1 : 0;
+    if (quiet_ticks_ >= options_.release_ticks) {
+      release();
+    } else if (state_ == State::kLqr && overload_ticks_ >= kOverloadTicks) {
+      release();
+      state_ = State::kSpring;
+      events_.overload = true;
+    } else if (state_ == State::kProbing && fresh) {
+      // Stiffness along the normal: force rise over depth, summed over new forces (a tool sliding
+      // over a curved surface at constant depth adds nothing to either, where a secant from the
+      // onset would count the surface's curvature as depth). The proxy is placed with the nominal
+      // stiffness until the probe has measured the scene's.
+      trackSurface(force, position, options_.nominal_stiffness, kProbeGain);
+      probe_force_ += normal_.dot(force - last_force_);
+      probe_depth_ += normal_.dot(last_position_ - position);
+      if (probe_depth_ >= kProbeDepth) {
+        const double k = probe_force_ / probe_depth_;
+        stiffness_ = std::isfinite(k) ? std::max(0.0, k) : 0.0;
+        if (stiffness_ > 0.0 && (stiffness_ >= options_.stiff_threshold || mode == WallMode::kLqr)) {
+          state_ = State::kLqr;
+          overload_ticks_ = 0;
+          surface_.active = true;
+          surface_.normal = normal_;
+          surface_.point = position + (force - kHoldForce * normal_) / stiffness_;
+          events_.engaged = true;
+        } else {
+          state_ = State::kSpring;  // a soft surface: the spring renders the whole contact
+          events_.soft_contact = true;
+          events_.soft_stiffness = stiffness_;
+        }
+      }
+    } else if (state_ == State::kLqr) {
+      // The plane: kHoldForce / k under the proxy, normal to the tracked normal; held without any
+      // force from the application, it sinks.
+      Vec3 step = Vec3::Zero();
+      double gain = 1.0;
+      if (fresh) trackSurface(force, position, stiffness_, kSlowGain);
+      if (fresh && has_proxy_) {
+        step = proxy_ - (kHoldForce / stiffness_) * normal_ - surface_.point;
+        gain = perTick(kOffsetGain);
+      } else if (held_ && magnitude < kTrackForce) {
+        step = -kCreepSpeed * options_.servo_period * normal_;
+      }
+      const double along = normal_.dot(step);
+      const double most = kPlaneStep * std::max(1, std::min(frames_ticks_, 50));  // 50 mm/s
+      step += (std::min(most, std::max(-most, gain * along)) - along) * normal_;
+      surface_.point += step;
+      surface_.normal = normal_;
+    }
+  }
+  if (fresh) {
+    last_force_ = force;
+    last_position_ = position;
+    frames_ticks_ = 0;
+  }
+  if (state_ != State::kLqr) surface_.active = false;
+}
+
+void TauContactClassifier::follow(const SurfaceContact& surface) noexcept {
+  events_ = Events{};
+  const bool was = state_ == State::kLqr;
+  surface_ = surface;
+  state_ = surface_.active ? State::kLqr : State::kFree;
+  events_.engaged = surface_.active && !was;
+  events_.released = !surface_.active && was;
+}
+
+void TauContactClassifier::wallTicked(const WallCommand& wall) noexcept {
+  const bool was_held = held_;
+  held_ = state_ == State::kLqr && wall.in_contact;
+  overload_ticks_ = held_ && wall.saturated ? overload_ticks_ + 1 : 0;
+  events_.held = held_;
+  events_.hold_started = false;
+  events_.saturated = false;
+  events_.penetration = 0.0;
+  if (!held_) return;
+  if (!was_held) {
+    entry_depth_ = wall.penetration;
+    events_.hold_started = true;
+    events_.entry_depth = wall.penetration;
+  }
+  if (wall.penetration <= kSettledDepth) entry_depth_ = 0.0;
+  events_.penetration = std::max(0.0, wall.penetration - entry_depth_);
+  events_.saturated = wall.saturated;
+}
+
+void TauContactClassifier::holdLost() noexcept { held_ = false; }
+
+}  // namespace uhaptics
