@@ -1,4 +1,4 @@
-// Numerical convergence of the simulated TAU (devices/backends/simulated_tau.hpp): what
+// Numerical convergence of the simulated TAU (devices/tau/backend/include/uhaptics/backends/simulated_tau.hpp): what
 // devices/params/tau.json claims for "rates/simulation_substeps", checked.
 #include <catch2/catch.hpp>
 #include <fstream>
