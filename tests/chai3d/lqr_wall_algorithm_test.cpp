@@ -5,6 +5,7 @@
 #include <cstdlib>
 
 #include "chai3d.h"
+#include "tau_push.hpp"
 #include "uhaptics/chai3d/CAlgorithmLqrWall.hpp"
 #include "uhaptics/tools/alloc_probe.hpp"
 
@@ -14,20 +15,9 @@ namespace {
 
 constexpr double kToolRadius = 0.001;  // m
 
-// Paper 001's push (8-15 N into the wall): a stiff hand spring led 10 mm below the surface,
-// saturating at 12 N. Wall mode "spring": the device never engages the LQR wall on its own, so
+// Wall mode "spring" in the push (tau_push.hpp): the device never engages the LQR wall on its own, so
 // whatever LQR contact happens comes from the algorithm.
-uhaptics::DeviceSelection tauSelection() {
-  uhaptics::DeviceSelection s;
-  s.device = "tau";
-  s.hand.waypoints = {uhaptics::Vec3(0, 0, 0.2), uhaptics::Vec3(0, 0, -0.6)};
-  s.hand.lap_time = 2.0;
-  s.hand.stiffness = 1500.0;
-  s.hand.damping = 20.0;
-  s.hand.max_force = 12.0;
-  s.options["wall"] = cTauDevice::C_TAU_WALL_SPRING;
-  return s;
-}
+uhaptics::DeviceSelection tauSelection() { return tauPushSelection(cTauDevice::C_TAU_WALL_SPRING); }
 
 struct Run {
   double max_penetration = 0.0;  // m, tool centre below the proxy's contact plane

@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "chai3d.h"
+#include "tau_push.hpp"
 #include "tool_scene.hpp"
 #include "uhaptics/chai3d/CTauDevice.hpp"
 #include "uhaptics/tools/alloc_probe.hpp"
@@ -16,19 +17,7 @@ namespace {
 
 constexpr double kToolRadius = 0.001;  // m
 
-// Paper 001's push: a hand that presses 8-15 N into the wall. Here a stiff hand spring (1500 N/m)
-// led 10 mm below the surface, saturating at 12 N.
-uhaptics::DeviceSelection tauSelection(cTauDevice::cWallMode mode) {
-  uhaptics::DeviceSelection s;
-  s.device = "tau";
-  s.hand.waypoints = {uhaptics::Vec3(0, 0, 0.2), uhaptics::Vec3(0, 0, -0.6)};
-  s.hand.lap_time = 2.0;
-  s.hand.stiffness = 1500.0;
-  s.hand.damping = 20.0;
-  s.hand.max_force = 12.0;
-  s.options["wall"] = mode;
-  return s;
-}
+uhaptics::DeviceSelection tauSelection(cTauDevice::cWallMode mode) { return tauPushSelection(mode); }
 
 struct Result {
   double max_penetration = 0.0;  // m, tool centre below (surface + tool radius)
