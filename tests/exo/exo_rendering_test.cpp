@@ -5,7 +5,7 @@
 #include <cstdint>
 #include <limits>
 
-#include "fig4_protocol.hpp"
+#include "uhaptics/experiments/exo_fig4.hpp"
 #include "uhaptics/renderers/underactuated_renderers.hpp"
 #include "uhaptics/tools/alloc_probe.hpp"
 

@@ -2,8 +2,8 @@
 #include <algorithm>
 #include <random>
 
-#include "rhi_experiments.hpp"
 #include "rhi_fixtures.hpp"
+#include "uhaptics/experiments/rhi_experiments.hpp"
 #include "uhaptics/tools/alloc_probe.hpp"
 
 using namespace uhaptics;

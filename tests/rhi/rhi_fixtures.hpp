@@ -5,7 +5,7 @@
 #include <cmath>
 #include <random>
 
-#include "rhi_experiments.hpp"
+#include "uhaptics/experiments/rhi_experiments.hpp"
 
 namespace uhaptics::rhi_test {
 

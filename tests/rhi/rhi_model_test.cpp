@@ -1,9 +1,9 @@
 #include <catch2/catch.hpp>
 #include <random>
 
-#include "rhi_experiments.hpp"
 #include "rhi_fixtures.hpp"
 #include "uhaptics/core/finite_difference.hpp"
+#include "uhaptics/experiments/rhi_experiments.hpp"
 
 using namespace uhaptics;
 

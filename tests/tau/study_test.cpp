@@ -2,7 +2,7 @@
 // (release without attraction, sliding without sticking).
 #include <catch2/catch.hpp>
 
-#include "tau_study.hpp"
+#include "uhaptics/experiments/tau_study.hpp"
 #include "uhaptics/core/limits.hpp"
 
 using namespace uhaptics;

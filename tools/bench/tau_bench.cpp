@@ -3,9 +3,9 @@
 #include <benchmark/benchmark.h>
 
 #include "uhaptics/backends/simulated_tau.hpp"
+#include "uhaptics/experiments/tau_study.hpp"
 #include "uhaptics/renderers/tau_wall.hpp"
 #include "uhaptics/tools/alloc_probe.hpp"
-#include "tau_study.hpp"
 
 using namespace uhaptics;
 

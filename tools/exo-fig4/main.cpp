@@ -11,10 +11,10 @@
 #include <iostream>
 #include <string>
 
-#include "fig4_protocol.hpp"
+#include "uhaptics/experiments/exo_fig4.hpp"
+#include "uhaptics/experiments/reproduction.hpp"
 #include "uhaptics/tools/csv.hpp"
 #include "uhaptics/tools/plot.hpp"
-#include "uhaptics/tools/reproduction.hpp"
 
 using namespace uhaptics;
 
@@ -109,7 +109,7 @@ int main(int argc, char** argv) {
     std::printf("nonlinear solve: mean %.3f iterations per tick, max %d, max residual %.3g rad\n",
                 r.mean_nonlinear_iterations, r.max_nonlinear_iterations, r.max_nonlinear_residual);
 
-    tools::ReproductionTable table;
+    experiments::ReproductionTable table;
     const auto& nl = r.summary[exo::kSubspaceNonlinear];
     const auto& lin = r.summary[exo::kSubspaceLinearized];
     table.addWithin("000", "subspace d tau_a/d q_a in theory = -Z_q (eq. 9), worst frame", -o.zq,

@@ -9,10 +9,10 @@
 #include <iostream>
 #include <sstream>
 
-#include "rhi_experiments.hpp"
+#include "uhaptics/experiments/reproduction.hpp"
+#include "uhaptics/experiments/rhi_experiments.hpp"
 #include "uhaptics/tools/csv.hpp"
 #include "uhaptics/tools/plot.hpp"
-#include "uhaptics/tools/reproduction.hpp"
 
 using namespace uhaptics;
 using uhaptics::tools::CsvWriter;
@@ -90,7 +90,7 @@ int main(int argc, char** argv) {
     tools::ensureDirectory(out);
     const Rhi4Model model = rhi::loadRhi4(params);
     const Planar3Model arm3 = rhi::loadPlanar3(params);
-    tools::ReproductionTable table;
+    experiments::ReproductionTable table;
     std::ostringstream summary;
     summary << std::fixed << std::setprecision(3);
 

@@ -9,12 +9,12 @@
 #include <string>
 #include <vector>
 
-#include "tau_study.hpp"
+#include "uhaptics/experiments/parallel.hpp"
+#include "uhaptics/experiments/reproduction.hpp"
+#include "uhaptics/experiments/tau_study.hpp"
 #include "uhaptics/tools/csv.hpp"
-#include "uhaptics/tools/parallel.hpp"
 #include "uhaptics/tools/plot.hpp"
 #include "uhaptics/tools/progress.hpp"
-#include "uhaptics/tools/reproduction.hpp"
 
 using namespace uhaptics;
 using namespace uhaptics::study;
@@ -171,7 +171,7 @@ int main(int argc, char** argv) {
     std::vector<RunMetrics> results(jobs * kNumVariants);
     tools::Progress progress("tau-study", jobs);
     const auto t0 = std::chrono::steady_clock::now();
-    tools::parallelFor(jobs, threads, [&](std::size_t job) {
+    experiments::parallelFor(jobs, threads, [&](std::size_t job) {
       const std::size_t point = job / static_cast<std::size_t>(runs);
       RunSpec spec;
       spec.x = -half + 2.0 * half * static_cast<double>(point % grid) / (grid - 1);
@@ -239,7 +239,7 @@ int main(int argc, char** argv) {
 
     // Table IV style summary. Our geometry and masses differ from the real TAU (unpublished), so
     // the absolute numbers are not expected to match; what must carry over is judged instead.
-    tools::ReproductionTable table;
+    experiments::ReproductionTable table;
     const double lqr_kz1_low = extreme_min[0], spring_kz1_high = extreme_max[2];
     const double lqr_kzs1_low = extreme_min[1], spring_kzs1_high = extreme_max[3];
     const double lqr_kzs2_low = extreme_min[5], spring_kzs2_high = extreme_max[7];
@@ -284,7 +284,7 @@ int main(int argc, char** argv) {
       std::printf("  %-13s faults %3d / %zu, max penetration %.3f mm\n", kVariants[v].label, variant_faults[v], jobs,
                   1e3 * max_pen[v]);
     std::printf("wall time %.2f s on %u threads: %.0f simulated seconds per second\n", wall,
-                threads ? threads : tools::hardwareThreads(), simulated / wall);
+                threads ? threads : experiments::hardwareThreads(), simulated / wall);
 
     // One trace per controller at the centre (Fig. 8/9 style) and the heat maps (Fig. 10, 12, 13).
     for (const Scenario sc : {Scenario::kStepForce, Scenario::kHand}) {

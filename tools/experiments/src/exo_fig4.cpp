@@ -1,4 +1,4 @@
-#include "fig4_protocol.hpp"
+#include "uhaptics/experiments/exo_fig4.hpp"
 
 #include <algorithm>
 #include <cmath>

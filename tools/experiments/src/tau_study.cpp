@@ -1,4 +1,4 @@
-#include "tau_study.hpp"
+#include "uhaptics/experiments/tau_study.hpp"
 
 #include <algorithm>
 #include <cmath>

@@ -1,4 +1,4 @@
-#include "rhi_experiments.hpp"
+#include "uhaptics/experiments/rhi_experiments.hpp"
 
 #include <Eigen/Cholesky>
 #include <algorithm>
@@ -7,7 +7,7 @@
 
 #include "uhaptics/core/mass_friction_fit.hpp"
 #include "uhaptics/core/self_motion.hpp"
-#include "uhaptics/tools/parallel.hpp"
+#include "uhaptics/experiments/parallel.hpp"
 
 namespace uhaptics::rhi {
 
@@ -472,7 +472,7 @@ std::vector<WorkspacePoint> workspaceRatioMap(const Rhi4Model& model, double ste
   fme::axisAlignedEllipsoid(u, scales.minor, scales.major, free_fme);
   fme::axisAlignedEllipsoid(u, scales.major, scales.minor, stiff_fme);
   const double margin = matchingOptions().limit_margin;
-  tools::parallelFor(points.size(), threads, [&](std::size_t k) {
+  experiments::parallelFor(points.size(), threads, [&](std::size_t k) {
     WorkspacePoint& p = points[k];
     Mat<2, 4> Jp;
     auto forceAt = [&](const Vec4& q) {
