@@ -54,45 +54,23 @@ Planar3Model loadPlanar3(const std::string& params_dir) {
   return Planar3Model::fromFile(params_dir + "/planar3.json", "planar3");
 }
 
-template <int N>
-Vec<N> inverseKinematics(const PlanarLinkageModel<N>& model, const Vec<N>& q_start, const Vec2& x) {
-  Vec<N> q = q_start;
-  const double err = fme::projectOnto(model, q, x);
-  if (!(err < 1e-9)) throw Error("inverse kinematics: point not reached (error " + std::to_string(err) + " m)");
-  return q;
-}
-template Vec<3> inverseKinematics<3>(const PlanarLinkageModel<3>&, const Vec<3>&, const Vec2&);
-template Vec<4> inverseKinematics<4>(const PlanarLinkageModel<4>&, const Vec<4>&, const Vec2&);
-
 namespace {
 // Configurations on the self-motion manifold through x: the first two link angles on a grid of
-// per_axis values each, links 3-4 closed by two-link inverse kinematics (both elbows), mapped to
-// joints (q = C^-1 (phi - phi0), each wrapped to within pi of home); those outside the joint limits
-// are left out. The manifold is 2-D for this arm, so the grid covers all of it.
+// per_axis values each, links 3-4 closed by the model's closed-form inverse kinematics (both elbows),
+// each joint wrapped to within pi of home; those outside the joint limits are left out. The manifold
+// is 2-D for this arm, so the grid covers all of it.
 template <class F>
 void forEachSelfMotionGridPoint(const Rhi4Model& model, const Vec2& x, int per_axis, F&& f) {
-  const auto& p = model.parameters();
-  const Mat<4, 4> coupling_inv = p.coupling.inverse();
-  const Vec4& d = p.link_length;
-  const Vec4 home = model.home();
   const JointLimits<4>& limits = model.jointLimits();
+  std::array<Vec4, 2> solutions;
+  Vec4 q;
   for (int i = 0; i < per_axis; ++i)
     for (int j = 0; j < per_axis; ++j) {
-      Vec4 phi;
-      phi(0) = -M_PI + 2.0 * M_PI * i / per_axis;
-      phi(1) = -M_PI + 2.0 * M_PI * j / per_axis;
-      const Vec2 r = x - p.base - d(0) * Vec2(std::cos(phi(0)), std::sin(phi(0))) -
-                     d(1) * Vec2(std::cos(phi(1)), std::sin(phi(1)));
-      const double c = (r.squaredNorm() - d(2) * d(2) - d(3) * d(3)) / (2.0 * d(2) * d(3));
-      if (!(std::abs(c) <= 1.0)) continue;  // links 3-4 cannot close the loop
-      for (int branch = 0; branch < 2; ++branch) {
-        const double gamma = (branch == 0 ? 1.0 : -1.0) * std::acos(c);
-        phi(2) = std::atan2(r(1), r(0)) - std::atan2(d(3) * std::sin(gamma), d(2) + d(3) * std::cos(gamma));
-        phi(3) = phi(2) + gamma;
-        Vec4 q = coupling_inv * (phi - p.angle_offset);
-        for (int k = 0; k < 4; ++k) q(k) = home(k) + std::remainder(q(k) - home(k), 2.0 * M_PI);
+      const Vec2 leading(-M_PI + 2.0 * M_PI * i / per_axis, -M_PI + 2.0 * M_PI * j / per_axis);
+      const int count = model.closeLastTwoLinks(x, leading, solutions);
+      for (int branch = 0; branch < count; ++branch) {
+        model.nearestEquivalent(solutions[static_cast<std::size_t>(branch)], model.home(), q);
         if (limits.contains(q)) f(i, j, branch, q);
-        if (branch == 0 && c == 1.0) break;  // stretched: one solution
       }
     }
 }

@@ -22,10 +22,6 @@ using Planar3Controller = FmeNullSpaceController<Planar3Model>;
 Rhi4Model loadRhi4(const std::string& params_dir);
 Planar3Model loadPlanar3(const std::string& params_dir);
 
-/// Damped-least-squares inverse kinematics from q_start; throws uhaptics::Error when x is not reached.
-template <int N>
-Vec<N> inverseKinematics(const PlanarLinkageModel<N>& model, const Vec<N>& q_start, const Vec2& x);
-
 /// The configuration whose FME matches `target` at end-effector position x: the lowest
 /// nu + (k_L / beta) P over self-motion descents from 5 fixed starts and the local minima of a 10 deg
 /// grid of the self-motion manifold, within the model's joint limits (the state the null-space
