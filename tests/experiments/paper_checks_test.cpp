@@ -6,6 +6,7 @@
 #include <string>
 #include <vector>
 
+#include "device_models.hpp"
 #include "uhaptics/experiments/exo_fig4.hpp"
 #include "uhaptics/experiments/rhi_experiments.hpp"
 #include "uhaptics/experiments/tau_study.hpp"
@@ -24,7 +25,7 @@ const experiments::ReproductionRow& row(const ReproductionTable& table, const st
 }  // namespace
 
 TEST_CASE("TAU study: paper 001's checks pass at its published numbers and fail past their bounds") {
-  const TauModel model = TauModel::load(std::string(UHAPTICS_PARAMS_DIR) + "/tau.json");
+  const TauModel& model = test::tauModel();
   LqrWallGains gains;
   gains.fastest_pole_rad_s = 2480.0;
   study::Requirements req;

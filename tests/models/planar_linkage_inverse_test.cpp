@@ -5,8 +5,8 @@
 #include <catch2/catch.hpp>
 #include <cmath>
 #include <random>
-#include <string>
 
+#include "device_models.hpp"
 #include "uhaptics/models/planar_linkage_model.hpp"
 
 using namespace uhaptics;
@@ -14,14 +14,6 @@ using namespace uhaptics;
 namespace {
 using Vec4 = Vec<4>;
 
-const Rhi4Model& rhi4() {
-  static const Rhi4Model m = Rhi4Model::fromFile(std::string(UHAPTICS_PARAMS_DIR) + "/rhi4.json", "rhi4");
-  return m;
-}
-const Planar3Model& planar3() {
-  static const Planar3Model m = Planar3Model::fromFile(std::string(UHAPTICS_PARAMS_DIR) + "/planar3.json", "planar3");
-  return m;
-}
 
 template <int N>
 Vec2 forwardOf(const PlanarLinkageModel<N>& model, const Vec<N>& q) {
@@ -75,12 +67,12 @@ void checkRoundTrips(const PlanarLinkageModel<N>& model) {
 }  // namespace
 
 TEST_CASE("Planar linkage inverse kinematics: round trips through the forward kinematics within 1e-9 m") {
-  checkRoundTrips(rhi4());
-  checkRoundTrips(planar3());
+  checkRoundTrips(test::rhi4Model());
+  checkRoundTrips(test::planar3Model());
 }
 
 TEST_CASE("Planar linkage inverse kinematics: from home to reachable points of the RHI's workspace") {
-  const Rhi4Model& model = rhi4();
+  const Rhi4Model& model = test::rhi4Model();
   const Vec2 base = model.parameters().base;
   for (const Vec2& offset : {Vec2(0.1, 0.05), Vec2(-0.2, 0.1), Vec2(0.0, -0.25), Vec2(0.3, 0.3)}) {
     Vec4 q = model.home();
@@ -90,7 +82,7 @@ TEST_CASE("Planar linkage inverse kinematics: from home to reachable points of t
 }
 
 TEST_CASE("Planar linkage inverse kinematics: unreachable and singular targets fail clearly, no NaN") {
-  const Rhi4Model& model = rhi4();
+  const Rhi4Model& model = test::rhi4Model();
   const Vec2 base = model.parameters().base;
   const double reach = model.reach();
   const Vec4 home = model.home();
@@ -146,7 +138,7 @@ TEST_CASE("Planar linkage inverse kinematics: unreachable and singular targets f
 }
 
 TEST_CASE("Planar linkage: whole turns of a joint are undone by the wrap to the nearest equivalent") {
-  const Rhi4Model& model = rhi4();
+  const Rhi4Model& model = test::rhi4Model();
   const Vec4 q = model.home() + Vec4(0.1, -0.2, 0.3, -0.4);
   const Vec4 turned = q + 2.0 * M_PI * Vec4(1.0, -2.0, 0.0, 3.0);
   CHECK((forwardOf(model, turned) - forwardOf(model, q)).norm() < 1e-12);

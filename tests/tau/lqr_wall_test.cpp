@@ -4,6 +4,7 @@
 #include <limits>
 #include <utility>
 
+#include "renderer_fixtures.hpp"
 #include "uhaptics/backends/simulated_tau.hpp"
 #include "uhaptics/renderers/tau_wall.hpp"
 #include "uhaptics/tools/alloc_probe.hpp"
@@ -11,14 +12,8 @@
 using namespace uhaptics;
 
 namespace {
-const TauModel& model() {
-  static const TauModel m = TauModel::load(std::string(UHAPTICS_PARAMS_DIR) + "/tau.json");
-  return m;
-}
-const LqrWallGains& gains() {
-  static const LqrWallGains g = designLqrWall(model(), model().homePose());
-  return g;
-}
+const TauModel& model() { return test::tauModel(); }
+const LqrWallGains& gains() { return test::tauHomeGains(); }
 SurfaceContact wallAt(const Vec6& pose) {
   SurfaceContact c;
   c.active = true;
