@@ -8,9 +8,9 @@
 #include <cstdio>
 #include <fstream>
 #include <map>
-#include <sstream>
 
 #include "chai3d.h"
+#include "params.hpp"
 #include "tool_scene.hpp"
 #include "uhaptics/chai3d/CRedundantPlanarDevice.hpp"
 #include "uhaptics/tools/alloc_probe.hpp"
@@ -37,13 +37,6 @@ std::map<std::string, double> named(const cRedundantPlanarDevice::Controller::Op
           {"eps2", o.transition.leave_stiff_at},
           {"rho", o.transition.rho},
           {"mode", static_cast<double>(o.mode)}};
-}
-
-std::string readFile(const std::string& path) {
-  std::ifstream in(path);
-  std::stringstream text;
-  text << in.rdbuf();
-  return text.str();
 }
 
 // The null-space envelope's ramp r(t) (FmeControllerOptions::null_space_ramp_time).
@@ -400,7 +393,7 @@ TEST_CASE("rhi: the statistics file on close shows the contact and the rendered 
     for (int i = 0; i < 2000; ++i) scene.tick();
     scene.tool->stop();  // closes the device: the file is written now
   }
-  const std::string json = readFile(selection.stats_path);
+  const std::string json = uhaptics::test::readFile(selection.stats_path);
   std::remove(selection.stats_path.c_str());
   CHECK_THAT(json, Catch::Contains("\"device\": \"rhi\"") && Catch::Contains("\"ticks\": 2000") &&
                        Catch::Contains("FME null space"));

@@ -3,26 +3,17 @@
 #include <Eigen/LU>
 #include <catch2/catch.hpp>
 #include <cmath>
-#include <fstream>
-#include <sstream>
 
+#include "device_models.hpp"
 #include "uhaptics/core/finite_difference.hpp"
 #include "uhaptics/models/param_file.hpp"
 
 using namespace uhaptics;
 
 namespace {
-const std::string kParams = ExoFingerModel::defaultParamsPath(UHAPTICS_PARAMS_DIR);
-const ExoFingerModel& model() {
-  static const ExoFingerModel m = ExoFingerModel::load(kParams);
-  return m;
-}
-std::string shippedText() {
-  std::ifstream in(kParams);
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
+const std::string kParams = ExoFingerModel::defaultParamsPath(test::paramsDir());
+const ExoFingerModel& model() { return test::exoModel(); }
+std::string shippedText() { return test::readFile(kParams); }
 // Replaces the first occurrence of `from` in the shipped file.
 std::string edited(const std::string& from, const std::string& to) {
   std::string t = shippedText();

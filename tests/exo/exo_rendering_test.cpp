@@ -5,7 +5,8 @@
 #include <cstdint>
 #include <limits>
 
-#include "fig4_protocol.hpp"
+#include "renderer_fixtures.hpp"
+#include "uhaptics/experiments/exo_fig4.hpp"
 #include "uhaptics/renderers/underactuated_renderers.hpp"
 #include "uhaptics/tools/alloc_probe.hpp"
 
@@ -13,17 +14,8 @@ using namespace uhaptics;
 using Model = ExoFingerModel;
 
 namespace {
-const Model& model() {
-  static const Model m = Model::load(Model::defaultParamsPath(UHAPTICS_PARAMS_DIR));
-  return m;
-}
-UnderactuatedGains<Model> gains(double zx = 1e-4, double zq = 1.0) {
-  UnderactuatedGains<Model> g;
-  g.Zx = zx * Mat2::Identity();
-  g.Zq(0, 0) = zq;
-  g.force_limit = model().forceLimit();
-  return g;
-}
+const Model& model() { return test::exoModel(); }
+UnderactuatedGains<Model> gains(double zx = 1e-4, double zq = 1.0) { return test::exoGains(zx, zq); }
 Model::JointVector stateAt(double mcp_deg, double pip_deg) {
   Model::JointVector q;
   REQUIRE(model().inverse(Model::TaskVector(mcp_deg, pip_deg) * M_PI / 180.0, q));

@@ -8,14 +8,13 @@
 #include <fstream>
 #include <limits>
 
+#include "device_models.hpp"
+
 using namespace uhaptics;
 using Model = ExoFingerModel;
 
 namespace {
-const Model& model() {
-  static const Model m = Model::load(Model::defaultParamsPath(UHAPTICS_PARAMS_DIR));
-  return m;
-}
+const Model& model() { return test::exoModel(); }
 std::string writeTemp(const std::string& name, const std::string& text) {
   const std::string path = std::string("/tmp/uhaptics_exo_test_") + name;
   std::ofstream(path) << text;

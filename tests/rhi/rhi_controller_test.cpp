@@ -2,8 +2,8 @@
 #include <algorithm>
 #include <random>
 
-#include "rhi_experiments.hpp"
 #include "rhi_fixtures.hpp"
+#include "uhaptics/experiments/rhi_experiments.hpp"
 #include "uhaptics/tools/alloc_probe.hpp"
 
 using namespace uhaptics;
@@ -256,13 +256,13 @@ TEST_CASE("the transition removes the jump in the null-space torque") {
 }
 
 TEST_CASE("3-DoF example: stiff ellipsoid renders F_e without saturation, free one saturates") {
-  const auto ex = rhi::runExample3(rhi::loadPlanar3(UHAPTICS_PARAMS_DIR), 4.0, 1e-2);
+  const auto ex = rhi::runExample3(test::planar3Model(), 4.0, 1e-2);
   CHECK(ex.configs[2].min_alpha == 1.0);
   CHECK(ex.configs[2].peak_force == Approx(3.5).epsilon(1e-3));
   CHECK(ex.configs[1].peak_force < ex.configs[0].peak_force);
   CHECK(ex.configs[0].peak_force < 3.5);
   // The optimized configurations keep the end effector where it was held.
-  const auto m = rhi::loadPlanar3(UHAPTICS_PARAMS_DIR);
+  const auto& m = test::planar3Model();
   for (const auto& cfg : ex.configs) {
     Vec2 x;
     m.forward(cfg.q, x);

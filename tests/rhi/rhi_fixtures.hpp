@@ -1,18 +1,16 @@
 #pragma once
-// Shared by the RHI test files: the parameter file's model, loaded once, and uniformly random joint
-// angles over a full turn (deliberately beyond the joint limits: the properties under test hold
-// for any configuration).
+// Shared by the RHI test files: the parameter file's model (loaded once, tests/support) and
+// uniformly random joint angles over a full turn (deliberately beyond the joint limits: the
+// properties under test hold for any configuration).
 #include <cmath>
 #include <random>
 
-#include "rhi_experiments.hpp"
+#include "device_models.hpp"
+#include "uhaptics/experiments/rhi_experiments.hpp"
 
 namespace uhaptics::rhi_test {
 
-inline const Rhi4Model& rhi4() {
-  static const Rhi4Model m = rhi::loadRhi4(UHAPTICS_PARAMS_DIR);
-  return m;
-}
+inline const Rhi4Model& rhi4() { return test::rhi4Model(); }
 
 inline Vec<4> randomConfiguration(std::mt19937& rng) {
   std::uniform_real_distribution<double> angle(-M_PI, M_PI);

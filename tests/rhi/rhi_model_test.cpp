@@ -1,9 +1,9 @@
 #include <catch2/catch.hpp>
 #include <random>
 
-#include "rhi_experiments.hpp"
 #include "rhi_fixtures.hpp"
 #include "uhaptics/core/finite_difference.hpp"
+#include "uhaptics/experiments/rhi_experiments.hpp"
 
 using namespace uhaptics;
 
@@ -111,7 +111,7 @@ TEST_CASE("the simulated RHI saturates torques and brakes with friction") {
 }
 
 TEST_CASE("planar3 example device matches the paper's FME at q0") {
-  const auto m = rhi::loadPlanar3(UHAPTICS_PARAMS_DIR);
+  const auto& m = test::planar3Model();
   Mat<2, 3> J;
   m.jacobian(m.home(), J);
   Mat2 fme;
@@ -123,7 +123,7 @@ TEST_CASE("planar3 example device matches the paper's FME at q0") {
 }
 
 TEST_CASE("malformed RHI parameter files are rejected with a clear error") {
-  const std::string dir = UHAPTICS_PARAMS_DIR;
+  const std::string dir = test::paramsDir();
   CHECK_THROWS_WITH(Rhi4Model::fromFile(dir + "/planar3.json", "rhi4"), Catch::Contains("expected 'rhi4'"));
   CHECK_THROWS_WITH(Planar3Model::fromFile(dir + "/rhi4.json", "rhi4"), Catch::Contains("joints"));
   CHECK_THROWS_AS(Rhi4Model::fromFile(dir + "/missing.json", "rhi4"), Error);
@@ -152,5 +152,5 @@ TEST_CASE("RHI joint limits: parallelogram internal angles in [30, 150] deg, mot
   CHECK_FALSE(l.contains(Vec<4>(0.0, M_PI / 2, 0.0, 0.0)));
   CHECK_FALSE(l.contains(Vec<4>(0.0, 0.0, 0.0, M_PI / 2)));
   // The planar3 example has no stops.
-  CHECK_FALSE(rhi::loadPlanar3(UHAPTICS_PARAMS_DIR).jointLimits().any());
+  CHECK_FALSE(test::planar3Model().jointLimits().any());
 }

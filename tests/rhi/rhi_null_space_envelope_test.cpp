@@ -5,8 +5,8 @@
 #include <limits>
 #include <random>
 
-#include "rhi_experiments.hpp"
 #include "rhi_fixtures.hpp"
+#include "uhaptics/experiments/rhi_experiments.hpp"
 
 using namespace uhaptics;
 

@@ -6,9 +6,9 @@
 // the wall (16 N asked of a hand that pushes 8).
 #include <catch2/catch.hpp>
 
-#include "rhi_experiments.hpp"
 #include "rhi_fixtures.hpp"
 #include "uhaptics/backends/scripted_hand.hpp"
+#include "uhaptics/experiments/rhi_experiments.hpp"
 
 using namespace uhaptics;
 

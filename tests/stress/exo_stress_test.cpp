@@ -3,6 +3,7 @@
 #include <catch2/catch.hpp>
 #include <cmath>
 
+#include "renderer_fixtures.hpp"
 #include "stress_support.hpp"
 #include "uhaptics/core/passivity_observer.hpp"
 #include "uhaptics/models/exo_finger_model.hpp"
@@ -12,18 +13,9 @@ using namespace uhaptics;
 using Model = ExoFingerModel;
 
 namespace {
-const Model& model() {
-  static const Model m = Model::load(Model::defaultParamsPath(UHAPTICS_PARAMS_DIR));
-  return m;
-}
+const Model& model() { return test::exoModel(); }
 
-UnderactuatedGains<Model> gainsWith(double zx, double zq) {
-  UnderactuatedGains<Model> g;
-  g.Zx = zx * Mat2::Identity();
-  g.Zq(0, 0) = zq;
-  g.force_limit = model().forceLimit();
-  return g;
-}
+UnderactuatedGains<Model> gainsWith(double zx, double zq) { return test::exoGains(zx, zq); }
 
 // Every tick either faults with an exactly-zero command, or returns a finite command within limits.
 template <class Renderer>

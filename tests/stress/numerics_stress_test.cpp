@@ -8,6 +8,7 @@
 #include <cmath>
 #include <limits>
 
+#include "device_models.hpp"
 #include "stress_support.hpp"
 #include "uhaptics/core/dare.hpp"
 #include "uhaptics/core/lqr_design.hpp"
@@ -379,10 +380,7 @@ TEST_CASE("ZOH refuses an exponential that overflows instead of returning Inf or
 // ---- forward kinematics ----------------------------------------------------------------------
 
 namespace {
-const TauModel& tau() {
-  static const TauModel m = TauModel::load(std::string(UHAPTICS_PARAMS_DIR) + "/tau.json");
-  return m;
-}
+const TauModel& tau() { return test::tauModel(); }
 }  // namespace
 
 TEST_CASE("TAU forward kinematics: from home, from far warm starts, beyond the workspace: the pose that "
@@ -480,10 +478,7 @@ TEST_CASE("TAU forward kinematics on joints with no assembly, NaN or huge values
 }
 
 namespace {
-const ExoFingerModel& exo() {
-  static const ExoFingerModel m = ExoFingerModel::load(ExoFingerModel::defaultParamsPath(UHAPTICS_PARAMS_DIR));
-  return m;
-}
+const ExoFingerModel& exo() { return test::exoModel(); }
 }  // namespace
 
 TEST_CASE("Exoskeleton forward kinematics: exact round trips for every real configuration, every other "

@@ -6,6 +6,7 @@
 #include <Eigen/SVD>
 #include <cmath>
 
+#include "device_models.hpp"
 #include "stress_support.hpp"
 #include "uhaptics/backends/simulated_planar_linkage.hpp"
 #include "uhaptics/renderers/fme_null_space_controller.hpp"
@@ -15,9 +16,10 @@ using namespace uhaptics;
 namespace {
 template <int N>
 const PlanarLinkageModel<N>& model() {
-  static const PlanarLinkageModel<N> m = PlanarLinkageModel<N>::fromFile(
-      std::string(UHAPTICS_PARAMS_DIR) + (N == 4 ? "/rhi4.json" : "/planar3.json"), N == 4 ? "rhi4" : "planar3");
-  return m;
+  if constexpr (N == 4)
+    return test::rhi4Model();
+  else
+    return test::planar3Model();
 }
 
 template <int N>

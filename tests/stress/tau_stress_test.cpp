@@ -5,6 +5,7 @@
 #include <cmath>
 #include <limits>
 
+#include "renderer_fixtures.hpp"
 #include "stress_support.hpp"
 #include "uhaptics/backends/simulated_tau.hpp"
 #include "uhaptics/core/passivity_observer.hpp"
@@ -15,10 +16,7 @@
 using namespace uhaptics;
 
 namespace {
-const TauModel& model() {
-  static const TauModel m = TauModel::load(std::string(UHAPTICS_PARAMS_DIR) + "/tau.json");
-  return m;
-}
+const TauModel& model() { return test::tauModel(); }
 
 Vec3 randomUnit(stress::AdversarialSource& src) {
   Vec3 v(src.uniform(-1, 1), src.uniform(-1, 1), src.uniform(-1, 1));
@@ -180,7 +178,7 @@ TEST_CASE("TAU LQR wall recovers after adversarial readings: a glitch never leav
   // A faulting tick must leave no poisoned state behind (observer estimate, integrator): once
   // the readings are sane again the wall renders.
   stress::AdversarialSource src(99);
-  const LqrWallGains gains = designLqrWall(model(), model().homePose()).gains;
+  const LqrWallGains& gains = test::tauHomeGains();
   LqrWallRenderer r(model(), gains);
   const Vec6 q0 = model().homeJoints();
   SurfaceContact c;
@@ -313,7 +311,7 @@ TEST_CASE("TAU energy: the spring wall with the device damping generates no ener
   SpringWallRenderer damped(model(), o), undamped(model(), o);
   const EnergyRun with_b = interact(damped, 4.0, o.stiffness, seconds, 1);
   const EnergyRun without_b = interact(undamped, 0.0, o.stiffness, seconds, 1);
-  const LqrWallGains gains = designLqrWall(model(), model().homePose()).gains;
+  const LqrWallGains& gains = test::tauHomeGains();
   LqrWallRenderer lqr(model(), gains), lqr_undamped(model(), gains);
   const EnergyRun lqr_run = interact(lqr, 4.0, 0.0, seconds, 1);
   const EnergyRun lqr_undamped_run = interact(lqr_undamped, 0.0, 0.0, seconds, 1);

@@ -4,6 +4,7 @@
 #include <limits>
 #include <utility>
 
+#include "renderer_fixtures.hpp"
 #include "uhaptics/backends/simulated_tau.hpp"
 #include "uhaptics/renderers/lqr_wall_renderer.hpp"
 #include "uhaptics/renderers/spring_wall_renderer.hpp"
@@ -13,15 +14,9 @@
 using namespace uhaptics;
 
 namespace {
-const TauModel& model() {
-  static const TauModel m = TauModel::load(std::string(UHAPTICS_PARAMS_DIR) + "/tau.json");
-  return m;
-}
-const LqrWallDesign& design() {
-  static const LqrWallDesign d = designLqrWall(model(), model().homePose());
-  return d;
-}
-const LqrWallGains& gains() { return design().gains; }
+const TauModel& model() { return test::tauModel(); }
+const LqrWallDesign& design() { return test::tauHomeDesign(); }
+const LqrWallGains& gains() { return test::tauHomeGains(); }
 SurfaceContact wallAt(const Vec6& pose) {
   SurfaceContact c;
   c.active = true;

@@ -1,11 +1,10 @@
 // Numerical convergence of the simulated TAU (devices/tau/backend/include/uhaptics/backends/simulated_tau.hpp): what
 // devices/params/tau.json claims for "rates/simulation_substeps", checked.
 #include <catch2/catch.hpp>
-#include <fstream>
 #include <nlohmann/json.hpp>
-#include <sstream>
 #include <vector>
 
+#include "renderer_fixtures.hpp"
 #include "uhaptics/backends/simulated_tau.hpp"
 #include "uhaptics/models/param_file.hpp"
 #include "uhaptics/renderers/lqr_wall_renderer.hpp"
@@ -15,19 +14,11 @@
 using namespace uhaptics;
 
 namespace {
-const std::string kParams = std::string(UHAPTICS_PARAMS_DIR) + "/tau.json";
-
-const TauModel& model() {
-  static const TauModel m = TauModel::load(kParams);
-  return m;
-}
+const TauModel& model() { return test::tauModel(); }
 
 /// The same device with its plant refreshed (kinematics, J, M, gravity) every `period` seconds.
 TauModel modelWithPlantPeriod(double period, int substeps) {
-  std::ifstream in(kParams);
-  std::stringstream text;
-  text << in.rdbuf();
-  nlohmann::json doc = nlohmann::json::parse(text.str());
+  nlohmann::json doc = nlohmann::json::parse(test::readFile(test::paramsPath("tau.json")));
   doc["rates"]["servo_period"]["value"] = period;
   doc["rates"]["simulation_substeps"]["value"] = substeps;
   return TauModel::fromParams(ParamFile::parse(doc.dump(), "tau.json (modified period)"));
@@ -41,7 +32,7 @@ enum class Wall { kSpring, kLqr };
 /// of `plant` per servo tick.
 std::vector<double> trajectory(Wall wall, const TauModel& plant, int substeps, int plant_steps_per_tick) {
   const TauModel& m = model();
-  static const LqrWallGains gains = designLqrWall(m, m.homePose()).gains;
+  const LqrWallGains& gains = test::tauHomeGains();
   SimulatedTauOptions so;
   so.substeps = substeps;
   so.quantize = false;

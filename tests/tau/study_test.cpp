@@ -2,8 +2,9 @@
 // (release without attraction, sliding without sticking).
 #include <catch2/catch.hpp>
 
-#include "tau_study.hpp"
+#include "renderer_fixtures.hpp"
 #include "uhaptics/core/limits.hpp"
+#include "uhaptics/experiments/tau_study.hpp"
 #include "uhaptics/renderers/lqr_wall_renderer.hpp"
 #include "uhaptics/renderers/tau_wall_design.hpp"
 
@@ -11,14 +12,8 @@ using namespace uhaptics;
 using namespace uhaptics::study;
 
 namespace {
-const TauModel& model() {
-  static const TauModel m = TauModel::load(std::string(UHAPTICS_PARAMS_DIR) + "/tau.json");
-  return m;
-}
-const LqrWallGains& gains() {
-  static const LqrWallGains g = designLqrWall(model(), model().homePose()).gains;
-  return g;
-}
+const TauModel& model() { return test::tauModel(); }
+const LqrWallGains& gains() { return test::tauHomeGains(); }
 }  // namespace
 
 TEST_CASE("Study, reduced grid: LQR penetration < 1 mm and K_zs an order above the spring wall") {

@@ -4,6 +4,7 @@
 #include <catch2/catch.hpp>
 #include <cmath>
 
+#include "device_models.hpp"
 #include "uhaptics/core/finite_difference.hpp"
 #include "uhaptics/core/kinematic_model.hpp"
 #include "uhaptics/models/param_file.hpp"
@@ -11,10 +12,7 @@
 using namespace uhaptics;
 
 namespace {
-const TauModel& model() {
-  static const TauModel m = TauModel::load(std::string(UHAPTICS_PARAMS_DIR) + "/tau.json");
-  return m;
-}
+const TauModel& model() { return test::tauModel(); }
 }  // namespace
 
 TEST_CASE("TAU model satisfies the kinematic-model interface") { STATIC_REQUIRE(kIsKinematicModel<TauModel>); }

@@ -6,9 +6,8 @@
 #include <libusb.h>
 
 #include <cstdio>
-#include <fstream>
-#include <sstream>
 
+#include "params.hpp"
 #include "uhaptics/backends/board_catalog.hpp"
 #include "uhaptics/protocol/libusb_transport.hpp"
 #include "uhaptics/core/fault.hpp"
@@ -28,13 +27,6 @@ DeviceDescriptor tauDescriptor() {
   d.actuators = 6;
   d.effort_limit.fill(2.0);
   return d;
-}
-
-std::string readFile(const std::string& path) {
-  std::ifstream in(path);
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
 }
 
 const std::string kUdevRule = UHAPTICS_UDEV_RULE;
@@ -75,7 +67,7 @@ TEST_CASE("opening errors come with what to do", "[usb][libusb]") {
 }
 
 TEST_CASE("the shipped udev rule covers every device's vendor/product id", "[usb][udev]") {
-  const std::string rules = readFile(kUdevRule);
+  const std::string rules = test::readFile(kUdevRule);
   REQUIRE_FALSE(rules.empty());
   for (const DeviceDefinition* device : deviceDefinitions()) {
     const DeviceDescriptor d = boardSpec(*device, UHAPTICS_PARAMS_DIR).descriptor;

@@ -3,11 +3,11 @@
 #include <benchmark/benchmark.h>
 
 #include "uhaptics/backends/simulated_tau.hpp"
+#include "uhaptics/experiments/tau_study.hpp"
 #include "uhaptics/renderers/lqr_wall_renderer.hpp"
 #include "uhaptics/renderers/spring_wall_renderer.hpp"
 #include "uhaptics/renderers/tau_wall_design.hpp"
 #include "uhaptics/tools/alloc_probe.hpp"
-#include "tau_study.hpp"
 
 using namespace uhaptics;
 

@@ -6,22 +6,22 @@
 // exo_fig4.png (joint angles, force, theoretical and finite-difference displayed impedance) and
 // reproduction.csv (the paper's checkable claims next to what we measure).
 #include <CLI/CLI.hpp>
-#include <cmath>
 #include <cstdio>
 #include <iostream>
 #include <string>
 
-#include "fig4_protocol.hpp"
+#include "uhaptics/backends/params_location.hpp"
+#include "uhaptics/experiments/exo_fig4.hpp"
+#include "uhaptics/experiments/reproduction.hpp"
 #include "uhaptics/tools/csv.hpp"
 #include "uhaptics/tools/plot.hpp"
-#include "uhaptics/tools/reproduction.hpp"
 
 using namespace uhaptics;
 
 int main(int argc, char** argv) {
   CLI::App app{"Paper 000, Fig. 4: displayed impedance of four renderers on the finger exoskeleton"};
   std::string out = "out/exo-fig4";
-  std::string params = ExoFingerModel::defaultParamsPath(UHAPTICS_PARAMS_DIR);
+  std::string params = ExoFingerModel::defaultParamsPath(defaultParamsDirectory());
   std::string method = "gn";
   exo::Fig4Options o;
   app.add_option("--out", out, "output folder")->capture_default_str();
@@ -50,15 +50,9 @@ int main(int argc, char** argv) {
 
   try {
     const ExoFingerModel model = ExoFingerModel::load(params);
-    const exo::Fig4Result r = exo::runFig4(model, o);
-    // Contact variant: the same renderers with small proxy deviations, where the linearization of
-    // eq. 8 is meant to hold (the proxy is where a contact would stop the finger).
-    exo::Fig4Options oc = o;
-    oc.contact = true;
-    oc.proxy = ExoFingerModel::TaskVector(45.0, 50.0) * (M_PI / 180.0);
-    oc.contact_amplitude = contact_deg * M_PI / 180.0;
-    oc.trajectory_csv.clear();
-    const exo::Fig4Result rc = exo::runFig4(model, oc);
+    const exo::Fig4Study study = exo::runFig4Study(model, o, contact_deg);
+    const exo::Fig4Result& r = study.protocol;
+    const exo::Fig4Result& rc = study.contact;
     tools::ensureDirectory(out);
 
     {  // scope: the CSV must be complete (flushed, closed) before the plot script reads it
@@ -109,32 +103,11 @@ int main(int argc, char** argv) {
     std::printf("nonlinear solve: mean %.3f iterations per tick, max %d, max residual %.3g rad\n",
                 r.mean_nonlinear_iterations, r.max_nonlinear_iterations, r.max_nonlinear_residual);
 
-    tools::ReproductionTable table;
-    const auto& nl = r.summary[exo::kSubspaceNonlinear];
-    const auto& lin = r.summary[exo::kSubspaceLinearized];
-    table.addWithin("000", "subspace d tau_a/d q_a in theory = -Z_q (eq. 9), worst frame", -o.zq,
-                    -o.zq - r.max_subspace_theory_error, 1e-9 * o.zq, "N/m");
-    table.addWithin("000", "subspace passive in theory, share of frames", 100.0, 100.0 * std::min(nl.theoryShare(), lin.theoryShare()), 0.0, "%");
-    table.addWithin("000", "subspace (eq. 6, nonlinear) passive by finite differences", 100.0, 100.0 * nl.fdShare(), 0.0, "%");
-    for (int m : {exo::kStandard, exo::kNullSpace}) {
-      const auto& s = r.summary[m];
-      table.addWithin("000", std::string(exo::methodName(m)) + " passive in theory (Z_x = k I), share of frames", 100.0,
-                      100.0 * s.theoryShare(), 0.0, "%");
-      table.addBound("000", std::string(exo::methodName(m)) + " passive by finite differences (paper: not always)",
-                     100.0 * s.fdShare(), "< 100", s.fdShare() < 1.0, "%");
-    }
-    const auto& lin_contact = rc.summary[exo::kSubspaceLinearized];
-    table.addWithin("000", "subspace (eq. 8, linearized) passive by finite differences, finger within " +
-                               std::to_string(static_cast<int>(std::lround(contact_deg))) + " deg of the proxy",
-                    100.0, 100.0 * lin_contact.fdShare(), 0.0, "%");
-    table.addWithin("000", "subspace (eq. 6, nonlinear) passive by finite differences, contact variant", 100.0,
-                    100.0 * rc.summary[exo::kSubspaceNonlinear].fdShare(), 0.0, "%");
+    const experiments::ReproductionTable table = exo::reproductionTable(study);
     table.writeCsv(out + "/reproduction.csv");
     std::cout << table.format();
-    // The linearized form (eq. 8) is checked where its linearization is meant to hold (the contact
-    // variant above) and only reported for the Fig. 4 protocol: there the proxy is up to 95 deg from
-    // the finger (the paper's own caveat on the linearization), and the share depends on our
-    // assumed linkage. The exact form, eq. 6, is checked in both.
+    // The linearized form (eq. 8) is only reported for the Fig. 4 protocol (exo::reproductionTable).
+    const auto& lin = r.summary[exo::kSubspaceLinearized];
     if (!lin.fd_frames || lin.fdShare() < 1.0)
       std::cout << "note: with the proxy at x = 0 (up to 95 deg from the finger) the linearized subspace proxy\n"
                    "      (eq. 8) is passive in " << 100.0 * lin.fdShare() << " % of frames on this linkage: the deviation is\n"

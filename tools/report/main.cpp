@@ -6,7 +6,7 @@
 #include <fstream>
 #include <iostream>
 
-#include "uhaptics/tools/report.hpp"
+#include "uhaptics/experiments/report.hpp"
 
 int main(int argc, char** argv) {
   CLI::App app{"Collect the reproduction tables of all experiments into one report"};
@@ -16,7 +16,7 @@ int main(int argc, char** argv) {
   app.add_option("--meta", meta, "Run metadata as key=value (repeatable), shown at the top of the report");
   CLI11_PARSE(app, argc, argv);
   try {
-    const auto experiments = uhaptics::tools::collectExperiments(root);
+    const auto experiments = uhaptics::experiments::collectExperiments(root);
     if (experiments.empty()) {
       std::cerr << "uhaptics-report: no */reproduction.csv under '" << root << "'\n";
       return 2;
@@ -31,8 +31,8 @@ int main(int argc, char** argv) {
       metadata.emplace_back(kv.substr(0, eq), kv.substr(eq + 1));
     }
     const std::string path = root + "/REPORT.md";
-    std::ofstream(path) << uhaptics::tools::renderMarkdown(experiments, metadata);
-    uhaptics::tools::ReproductionTable all;
+    std::ofstream(path) << uhaptics::experiments::renderMarkdown(experiments, metadata);
+    uhaptics::experiments::ReproductionTable all;
     for (const auto& e : experiments)
       for (const auto& r : e.table.rows()) all.add(r);
     all.writeCsv(root + "/reproduction.csv");

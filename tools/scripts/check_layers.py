@@ -8,7 +8,7 @@ import os
 import re
 import sys
 
-ORDER = {"core": 1, "models": 2, "protocol": 3, "backends": 4, "renderers": 5, "chai3d": 6, "tools": 7}
+ORDER = {"core": 1, "models": 2, "protocol": 3, "backends": 4, "renderers": 5, "chai3d": 6, "tools": 7, "experiments": 7}
 # Folder (relative to the root) -> layer; the longest matching prefix wins.
 FOLDERS = {
     "plugin/core": "core", "devices/models": "models", "devices/protocol": "protocol",

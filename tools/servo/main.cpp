@@ -26,6 +26,7 @@
 #include <vector>
 
 #include "device_servo_renderers.hpp"
+#include "uhaptics/backends/params_location.hpp"
 #include "uhaptics/backends/board_catalog.hpp"
 #include "uhaptics/backends/board_emulator.hpp"
 #include "uhaptics/protocol/libusb_transport.hpp"
@@ -33,7 +34,7 @@
 #include "uhaptics/core/fault.hpp"
 #include "uhaptics/tools/csv.hpp"
 #include "uhaptics/tools/plot.hpp"
-#include "uhaptics/tools/reproduction.hpp"
+#include "uhaptics/experiments/reproduction.hpp"
 
 using namespace uhaptics;
 
@@ -73,9 +74,9 @@ struct DeviceRun {
 };
 
 DeviceRun runDevice(const std::string& device_name, const Settings& st, const std::string& out,
-                    tools::ReproductionTable& table) {
+                    experiments::ReproductionTable& table) {
   const DeviceDefinition& definition = findDevice(device_name);
-  const BoardSpec spec = st.params.empty() ? boardSpec(definition, UHAPTICS_PARAMS_DIR) : boardSpecFromFile(definition, st.params);
+  const BoardSpec spec = st.params.empty() ? boardSpec(definition, defaultParamsDirectory()) : boardSpecFromFile(definition, st.params);
   const DeviceDescriptor& device = spec.descriptor;
   ServoConfig cfg;
   cfg.rate_hz = st.rate > 0.0 ? st.rate : spec.servo_rate_hz;
@@ -98,7 +99,7 @@ DeviceRun runDevice(const std::string& device_name, const Settings& st, const st
     transport = std::make_unique<BoardEmulator>(board, *plant);
   }
   const bool with_renderer = !st.usb || st.renderer;
-  const auto renderer = with_renderer ? makeDeviceRenderer(definition, UHAPTICS_PARAMS_DIR) : nullptr;
+  const auto renderer = with_renderer ? makeDeviceRenderer(definition, defaultParamsDirectory()) : nullptr;
   MeasuringRenderer measuring(renderer.get());
   ServoLoop loop(device, *transport, cfg, &measuring);
   const wire::DeviceInfo info = loop.connect();
@@ -210,7 +211,7 @@ int main(int argc, char** argv) {
         device_name == "all" ? choices : std::vector<std::string>{device_name};
     if (devices.size() > 1 && !st.params.empty()) throw Error("--params names one device's file: use it with one --device");
     tools::ensureDirectory(st.out);
-    tools::ReproductionTable table;
+    experiments::ReproductionTable table;
     bool ok = true;
     for (const auto& d : devices) ok = runDevice(d, st, st.out + "/" + d, table).ok && ok;
     table.writeCsv(st.out + "/reproduction.csv");

@@ -10,6 +10,7 @@
 #include <string>
 #include <vector>
 
+#include "uhaptics/backends/params_location.hpp"
 #include "uhaptics/renderers/tau_wall_design.hpp"
 #include "uhaptics/tools/plot.hpp"
 
@@ -30,7 +31,7 @@ void writeMatrix(std::ostream& os, const char* name, const M& m, bool last = fal
 
 int main(int argc, char** argv) {
   CLI::App app{"Design LQR position-control wall gains for a TAU-class device (paper 001)"};
-  std::string params = std::string(UHAPTICS_PARAMS_DIR) + "/tau.json";
+  std::string params = defaultParamsDirectory() + "/tau.json";
   std::string out = "out/tau-design/gains.json";
   std::vector<double> pose(6, 0.0);
   const LqrWallWeights defaults;  // tuned for tau.json (README); paper 001: 1 1e3 1e7 1

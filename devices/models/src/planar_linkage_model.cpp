@@ -1,8 +1,10 @@
 #include "uhaptics/models/planar_linkage_model.hpp"
 
+#include <Eigen/LU>
 #include <sstream>
 
 #include "uhaptics/core/fault.hpp"
+#include "uhaptics/core/regularized_solve.hpp"
 #include "uhaptics/models/param_file.hpp"
 
 namespace uhaptics {
@@ -41,6 +43,10 @@ PlanarLinkageModel<N>::PlanarLinkageModel(Parameters p) : p_(std::move(p)) {
   for (int j = 0; j < N; ++j)
     if (p_.coupling.col(j).cwiseAbs().maxCoeff() == 0.0)
       throw Error(d + ": joint " + std::to_string(j) + " moves no link (zero column in coupling)");
+  const double det = p_.coupling.determinant();
+  coupling_invertible_ = std::isfinite(det) && std::abs(det) > 1e-12;
+  if (coupling_invertible_) coupling_inverse_ = p_.coupling.inverse();
+  coupling_integer_ = (p_.coupling.array() == p_.coupling.array().round()).all();
 }
 
 template <int N>
@@ -151,6 +157,59 @@ void PlanarLinkageModel<N>::frictionTorque(const JointVector& qd, JointVector& f
     f(i) = p_.viscous_friction(i) * qd(i) + p_.coulomb_friction(i) * th;
     if (dfdqd) (*dfdqd)(i) = p_.viscous_friction(i) + p_.coulomb_friction(i) * (1.0 - th * th) / v;
   }
+}
+
+template <int N>
+Fault PlanarLinkageModel<N>::inverse(const TaskVector& x, JointVector& q) const noexcept {
+  if (!x.allFinite() || !q.allFinite()) return Fault::kNonFiniteInput;
+  if ((x - p_.base).norm() > reach() + 1e-9) return Fault::kOutOfRange;
+  JointVector qi = q;
+  TaskVector xi;
+  Jacobian J;
+  for (int i = 0; i < 50; ++i) {
+    forward(qi, xi);
+    const TaskVector dx = x - xi;
+    if (dx.norm() < 1e-13) break;
+    jacobian(qi, J);
+    qi += regularizedSolve(J, dx);
+  }
+  forward(qi, xi);
+  if (!qi.allFinite() || !xi.allFinite()) return Fault::kNonFiniteResult;
+  if (!((x - xi).norm() <= 1e-9)) return Fault::kNotConverged;
+  q = qi;
+  return Fault::kNone;
+}
+
+template <int N>
+int PlanarLinkageModel<N>::closeLastTwoLinks(const TaskVector& x, const Vec<N - 2>& leading_angles,
+                                             std::array<JointVector, 2>& q) const noexcept {
+  if (!coupling_invertible_ || !x.allFinite() || !leading_angles.allFinite()) return 0;
+  const Vec<N>& d = p_.link_length;
+  constexpr int a = N - 2, b = N - 1;  // the two closing links
+  Vec<N> phi;
+  TaskVector r = x - p_.base;  // from the end of the leading links to x
+  for (int i = 0; i < a; ++i) {
+    phi(i) = leading_angles(i);
+    r -= d(i) * Vec2(std::cos(phi(i)), std::sin(phi(i)));
+  }
+  const double c = (r.squaredNorm() - d(a) * d(a) - d(b) * d(b)) / (2.0 * d(a) * d(b));  // cos gamma
+  if (!(std::abs(c) <= 1.0)) return 0;
+  const int count = c == 1.0 ? 1 : 2;
+  for (int k = 0; k < count; ++k) {
+    const double gamma = (k == 0 ? 1.0 : -1.0) * std::acos(c);
+    phi(a) = std::atan2(r(1), r(0)) - std::atan2(d(b) * std::sin(gamma), d(a) + d(b) * std::cos(gamma));
+    phi(b) = phi(a) + gamma;
+    q[static_cast<std::size_t>(k)] = coupling_inverse_ * (phi - p_.angle_offset);
+  }
+  return count;
+}
+
+template <int N>
+void PlanarLinkageModel<N>::nearestEquivalent(const JointVector& q, const JointVector& reference,
+                                              JointVector& q_near) const noexcept {
+  q_near = q;
+  if (!coupling_integer_) return;
+  for (int k = 0; k < N; ++k) q_near(k) = reference(k) + std::remainder(q(k) - reference(k), 2.0 * M_PI);
 }
 
 template class PlanarLinkageModel<3>;

@@ -22,9 +22,11 @@
 // The model is immutable (loaded once from a versioned JSON file); every method is const, noexcept
 // and allocation-free, so it satisfies the kinematic-model interface and the optional
 // capabilities of model_capabilities.hpp (Jacobian derivative, mass matrix).
+#include <array>
 #include <cmath>
 #include <string>
 
+#include "uhaptics/core/fault.hpp"
 #include "uhaptics/core/joint_limits.hpp"
 #include "uhaptics/core/types.hpp"
 
@@ -76,6 +78,26 @@ class PlanarLinkageModel {
   /// Joint friction torque opposing q_dot (viscous + smoothed Coulomb) and its derivative.
   void frictionTorque(const JointVector& qd, JointVector& f, JointVector* dfdqd = nullptr) const noexcept;
 
+  // ---- inverse kinematics (set-up and analysis; allocation-free) ----
+  /// Inverse kinematics from a starting guess: damped Newton steps (regularizedSolve, so a
+  /// singular guess takes bounded steps) until |forward(q) - x| <= 1e-9 m. q: the guess in, the
+  /// solution out. On a fault q is left as it was: kNonFiniteInput (x or q not finite), kOutOfRange
+  /// (x outside the reachable disc), kNotConverged (x not reached from this guess, e.g. inside the
+  /// unreachable core or at the singular rim of the workspace).
+  Fault inverse(const TaskVector& x, JointVector& q) const noexcept;
+  /// Closed-form inverse kinematics with the first N - 2 links at the given absolute angles
+  /// (phi_0 .. phi_{N-3}, the coordinates of the self-motion manifold): the last two links close the
+  /// chain as a two-link arm, elbow angle gamma = phi_{N-1} - phi_{N-2} >= 0 in q[0], <= 0 in q[1].
+  /// Returns how many of q hold a solution: 0 when those two links cannot reach x (or the coupling
+  /// is singular), 1 when they are stretched (gamma = 0), else 2. Joint angles are those of
+  /// q = C^-1 (phi - phi0), without wrapping (nearestEquivalent wraps them).
+  int closeLastTwoLinks(const TaskVector& x, const Vec<N - 2>& leading_angles,
+                        std::array<JointVector, 2>& q) const noexcept;
+  /// The configuration equivalent to q (whole turns added to single joints) nearest `reference`:
+  /// each joint within pi of the reference's. Whole turns of one joint turn every link by whole
+  /// turns when the coupling is integer, as in both devices; with a non-integer coupling q_near = q.
+  void nearestEquivalent(const JointVector& q, const JointVector& reference, JointVector& q_near) const noexcept;
+
   const Selection& selection() const noexcept { return selection_; }
   const Parameters& parameters() const noexcept { return p_; }
   const JointVector& torqueLimits() const noexcept { return p_.torque_limit; }
@@ -93,6 +115,9 @@ class PlanarLinkageModel {
 
   Parameters p_;
   Selection selection_ = Selection::Identity();
+  Mat<N, N> coupling_inverse_ = Mat<N, N>::Zero();
+  bool coupling_invertible_ = false;
+  bool coupling_integer_ = false;  // whole turns of a joint leave the pose unchanged
 };
 
 using Rhi4Model = PlanarLinkageModel<4>;

@@ -5,9 +5,9 @@
 #include <utility>
 #include <vector>
 
-#include "uhaptics/tools/reproduction.hpp"
+#include "uhaptics/experiments/reproduction.hpp"
 
-namespace uhaptics::tools {
+namespace uhaptics::experiments {
 
 struct ExperimentResult {
   std::string folder;                // relative to the output root, e.g. "exo-fig4"
@@ -23,4 +23,4 @@ std::vector<ExperimentResult> collectExperiments(const std::string& root);
 std::string renderMarkdown(const std::vector<ExperimentResult>& experiments,
                            const std::vector<std::pair<std::string, std::string>>& metadata);
 
-}  // namespace uhaptics::tools
+}  // namespace uhaptics::experiments

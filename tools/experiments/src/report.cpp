@@ -1,4 +1,4 @@
-#include "uhaptics/tools/report.hpp"
+#include "uhaptics/experiments/report.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -9,7 +9,7 @@
 
 namespace fs = std::filesystem;
 
-namespace uhaptics::tools {
+namespace uhaptics::experiments {
 
 namespace {
 std::string fmt(double v) {
@@ -109,4 +109,4 @@ std::string renderMarkdown(const std::vector<ExperimentResult>& experiments,
   return md.str();
 }
 
-}  // namespace uhaptics::tools
+}  // namespace uhaptics::experiments

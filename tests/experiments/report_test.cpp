@@ -1,11 +1,11 @@
-#include "uhaptics/tools/report.hpp"
+#include "uhaptics/experiments/report.hpp"
 
 #include <catch2/catch.hpp>
 #include <filesystem>
 #include <fstream>
 
 namespace fs = std::filesystem;
-using namespace uhaptics::tools;
+using namespace uhaptics::experiments;
 
 TEST_CASE("the report gathers experiments by paper with their tables and figures") {
   const fs::path root = fs::temp_directory_path() / "uhaptics_report_test";

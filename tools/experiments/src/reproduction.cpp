@@ -1,4 +1,4 @@
-#include "uhaptics/tools/reproduction.hpp"
+#include "uhaptics/experiments/reproduction.hpp"
 
 #include <cmath>
 #include <cstdio>
@@ -7,7 +7,7 @@
 #include <sstream>
 #include <stdexcept>
 
-namespace uhaptics::tools {
+namespace uhaptics::experiments {
 
 namespace {
 std::string number(double v) {
@@ -119,4 +119,4 @@ std::string ReproductionTable::format() const {
   return os.str();
 }
 
-}  // namespace uhaptics::tools
+}  // namespace uhaptics::experiments

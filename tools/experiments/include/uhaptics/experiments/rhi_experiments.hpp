@@ -1,11 +1,14 @@
 #pragma once
-// Paper 003's studies on the simulated 4-DoF RHI and the 3-DoF example arm. Pure computation (no
-// files): tools/rhi-experiments/main.cpp writes the CSV/PNG, tests/rhi checks the numbers.
+// Paper 003's studies on the simulated 4-DoF RHI and the 3-DoF example arm, and the paper's published
+// numbers with the checks against them (reproductionTable). Computation only (no files):
+// uhaptics-rhi-experiments writes the CSV/PNG, tests/rhi checks the numbers.
 #include <array>
+#include <cstddef>
 #include <string>
 #include <vector>
 
 #include "uhaptics/backends/simulated_planar_linkage.hpp"
+#include "uhaptics/experiments/reproduction.hpp"
 #include "uhaptics/models/planar_linkage_model.hpp"
 #include "uhaptics/renderers/fme_null_space_controller.hpp"
 
@@ -18,10 +21,6 @@ using Planar3Controller = FmeNullSpaceController<Planar3Model>;
 
 Rhi4Model loadRhi4(const std::string& params_dir);
 Planar3Model loadPlanar3(const std::string& params_dir);
-
-/// Damped-least-squares inverse kinematics from q_start; throws uhaptics::Error when x is not reached.
-template <int N>
-Vec<N> inverseKinematics(const PlanarLinkageModel<N>& model, const Vec<N>& q_start, const Vec2& x);
 
 /// The configuration whose FME matches `target` at end-effector position x: the lowest
 /// nu + (k_L / beta) P over self-motion descents from 5 fixed starts and the local minima of a 10 deg
@@ -175,5 +174,43 @@ struct TransitionRun {
   double transition_duration = 0.0;   // rho |M_free - M_stiff|_F [s]
 };
 TransitionRun runTransition(const Rhi4Model& model, bool smooth, const PalpationSetup& setup = {});
+
+// ---- all of paper 003's studies, their checks and summary ------------------------------------------
+/// The controller's ellipsoid scales at home (mu = 5): K = mu lambda_max(M_hat_0), zeta = lambda_min / mu.
+struct HomeScales {
+  double K = 0.0, zeta = 0.0;
+};
+HomeScales homeScales(const Rhi4Model& model);
+
+/// The workspace map in numbers: points with a finite ratio, how many lie above 1, the kinds of the
+/// others, the range of the ratio.
+struct WorkspaceSummary {
+  std::size_t valid = 0, above = 0, pinned = 0, weaker = 0, unexplained = 0;
+  std::size_t rematched = 0, lifted = 0;  // rematched from the dense scan; of them, now above 1
+  double min_ratio = INFINITY, max_ratio = 0.0;
+};
+WorkspaceSummary summarize(const std::vector<WorkspacePoint>& map);
+
+struct StudyOptions {
+  int trials = 10;            // identification pushes per ellipsoid (paper: 10)
+  double map_step = 0.025;    // workspace grid spacing [m]
+  unsigned threads = 0;       // for the workspace map (0: all cores)
+};
+struct Studies {
+  HomeScales home;
+  ExampleResult example;                  // 3-DoF arm, Fig. 3-4
+  PalpationCase free_case, stiff_case;    // Table I
+  double map_step = 0.0, map_radius = 0.0;
+  std::vector<WorkspacePoint> map;        // Fig. 10
+  WorkspaceSummary workspace;
+  TransitionRun smooth, abrupt;           // Fig. 11
+};
+/// Every study at the paper's settings: the map over 0.95 of the reach.
+Studies runStudies(const Rhi4Model& model, const Planar3Model& arm3, const StudyOptions& options = {});
+
+/// Paper 003's published numbers next to the measured ones, with the checks that decide pass/fail.
+experiments::ReproductionTable reproductionTable(const Studies& studies);
+/// What the studies found, in words (summary.txt).
+std::string summary(const Studies& studies);
 
 }  // namespace uhaptics::rhi

@@ -1,15 +1,17 @@
 #pragma once
-// The Fig. 4 protocol of paper 000, shared by uhaptics-exo-fig4 and the exo tests: a finger
+// The Fig. 4 protocol of paper 000, run by uhaptics-exo-fig4 and checked by the exo tests: a finger
 // trajectory is played on the simulated exoskeleton, the proxy is held at x = 0, and every frame
 // each renderer's actuator force, its theoretical displayed impedance d tau_a / d q_a (eq. 2, 5, 9)
 // and the finite-difference impedance Delta tau_a / Delta q_a between frames are recorded.
-// Impedances are normalized as in the paper: Z_q = zq, Z_x = zq / avg(|J_a|)^2 I.
+// Impedances are normalized as in the paper: Z_q = zq, Z_x = zq / avg(|J_a|)^2 I. Also the paper's
+// claims with the checks against them (reproductionTable).
 #include <array>
 #include <string>
 #include <vector>
 
 #include "uhaptics/backends/exo_finger_sim.hpp"
 #include "uhaptics/core/subspace_proxy_solver.hpp"
+#include "uhaptics/experiments/reproduction.hpp"
 #include "uhaptics/models/exo_finger_model.hpp"
 
 namespace uhaptics::exo {
@@ -73,5 +75,20 @@ struct Fig4Result {
 
 /// Runs the protocol; throws uhaptics::Error for bad options or a bad trajectory file.
 Fig4Result runFig4(const ExoFingerModel& model, const Fig4Options& options);
+
+/// The Fig. 4 protocol and its contact variant: the same renderers with the proxy held at MCP 45,
+/// PIP 50 deg and the finger within +-contact_amplitude_deg of it, where the linearization of eq. 8
+/// is meant to hold (the proxy is where a contact would stop the finger).
+struct Fig4Study {
+  Fig4Options options;
+  double contact_amplitude_deg = 5.0;
+  Fig4Result protocol;
+  Fig4Result contact;
+};
+/// Runs both; throws uhaptics::Error like runFig4.
+Fig4Study runFig4Study(const ExoFingerModel& model, const Fig4Options& options, double contact_amplitude_deg);
+
+/// Paper 000's claims on Fig. 4 (eq. 2, 5, 6, 8, 9) next to what the study measured.
+experiments::ReproductionTable reproductionTable(const Fig4Study& study);
 
 }  // namespace uhaptics::exo

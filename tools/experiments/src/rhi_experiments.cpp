@@ -1,13 +1,15 @@
-#include "rhi_experiments.hpp"
+#include "uhaptics/experiments/rhi_experiments.hpp"
 
 #include <Eigen/Cholesky>
 #include <algorithm>
 #include <cmath>
+#include <iomanip>
 #include <limits>
+#include <sstream>
 
 #include "uhaptics/core/mass_friction_fit.hpp"
 #include "uhaptics/core/self_motion.hpp"
-#include "uhaptics/tools/parallel.hpp"
+#include "uhaptics/experiments/parallel.hpp"
 
 namespace uhaptics::rhi {
 
@@ -52,45 +54,23 @@ Planar3Model loadPlanar3(const std::string& params_dir) {
   return Planar3Model::fromFile(params_dir + "/planar3.json", "planar3");
 }
 
-template <int N>
-Vec<N> inverseKinematics(const PlanarLinkageModel<N>& model, const Vec<N>& q_start, const Vec2& x) {
-  Vec<N> q = q_start;
-  const double err = fme::projectOnto(model, q, x);
-  if (!(err < 1e-9)) throw Error("inverse kinematics: point not reached (error " + std::to_string(err) + " m)");
-  return q;
-}
-template Vec<3> inverseKinematics<3>(const PlanarLinkageModel<3>&, const Vec<3>&, const Vec2&);
-template Vec<4> inverseKinematics<4>(const PlanarLinkageModel<4>&, const Vec<4>&, const Vec2&);
-
 namespace {
 // Configurations on the self-motion manifold through x: the first two link angles on a grid of
-// per_axis values each, links 3-4 closed by two-link inverse kinematics (both elbows), mapped to
-// joints (q = C^-1 (phi - phi0), each wrapped to within pi of home); those outside the joint limits
-// are left out. The manifold is 2-D for this arm, so the grid covers all of it.
+// per_axis values each, links 3-4 closed by the model's closed-form inverse kinematics (both elbows),
+// each joint wrapped to within pi of home; those outside the joint limits are left out. The manifold
+// is 2-D for this arm, so the grid covers all of it.
 template <class F>
 void forEachSelfMotionGridPoint(const Rhi4Model& model, const Vec2& x, int per_axis, F&& f) {
-  const auto& p = model.parameters();
-  const Mat<4, 4> coupling_inv = p.coupling.inverse();
-  const Vec4& d = p.link_length;
-  const Vec4 home = model.home();
   const JointLimits<4>& limits = model.jointLimits();
+  std::array<Vec4, 2> solutions;
+  Vec4 q;
   for (int i = 0; i < per_axis; ++i)
     for (int j = 0; j < per_axis; ++j) {
-      Vec4 phi;
-      phi(0) = -M_PI + 2.0 * M_PI * i / per_axis;
-      phi(1) = -M_PI + 2.0 * M_PI * j / per_axis;
-      const Vec2 r = x - p.base - d(0) * Vec2(std::cos(phi(0)), std::sin(phi(0))) -
-                     d(1) * Vec2(std::cos(phi(1)), std::sin(phi(1)));
-      const double c = (r.squaredNorm() - d(2) * d(2) - d(3) * d(3)) / (2.0 * d(2) * d(3));
-      if (!(std::abs(c) <= 1.0)) continue;  // links 3-4 cannot close the loop
-      for (int branch = 0; branch < 2; ++branch) {
-        const double gamma = (branch == 0 ? 1.0 : -1.0) * std::acos(c);
-        phi(2) = std::atan2(r(1), r(0)) - std::atan2(d(3) * std::sin(gamma), d(2) + d(3) * std::cos(gamma));
-        phi(3) = phi(2) + gamma;
-        Vec4 q = coupling_inv * (phi - p.angle_offset);
-        for (int k = 0; k < 4; ++k) q(k) = home(k) + std::remainder(q(k) - home(k), 2.0 * M_PI);
+      const Vec2 leading(-M_PI + 2.0 * M_PI * i / per_axis, -M_PI + 2.0 * M_PI * j / per_axis);
+      const int count = model.closeLastTwoLinks(x, leading, solutions);
+      for (int branch = 0; branch < count; ++branch) {
+        model.nearestEquivalent(solutions[static_cast<std::size_t>(branch)], model.home(), q);
         if (limits.contains(q)) f(i, j, branch, q);
-        if (branch == 0 && c == 1.0) break;  // stretched: one solution
       }
     }
 }
@@ -472,7 +452,7 @@ std::vector<WorkspacePoint> workspaceRatioMap(const Rhi4Model& model, double ste
   fme::axisAlignedEllipsoid(u, scales.minor, scales.major, free_fme);
   fme::axisAlignedEllipsoid(u, scales.major, scales.minor, stiff_fme);
   const double margin = matchingOptions().limit_margin;
-  tools::parallelFor(points.size(), threads, [&](std::size_t k) {
+  experiments::parallelFor(points.size(), threads, [&](std::size_t k) {
     WorkspacePoint& p = points[k];
     Mat<2, 4> Jp;
     auto forceAt = [&](const Vec4& q) {
@@ -585,6 +565,162 @@ TransitionRun runTransition(const Rhi4Model& model, bool smooth, const Palpation
     run.samples.push_back(s);
   }
   return run;
+}
+
+// ---- all studies, their checks and summary -----------------------------------------------------------
+HomeScales homeScales(const Rhi4Model& model) {
+  const Rhi4Controller controller(model, model.torqueLimits(), model.home());
+  return {controller.majorAxis(), controller.minorAxis()};
+}
+
+WorkspaceSummary summarize(const std::vector<WorkspacePoint>& map) {
+  WorkspaceSummary w;
+  for (const auto& p : map) {
+    if (!std::isfinite(p.ratio)) continue;
+    ++w.valid;
+    w.above += p.ratio > 1.0 ? 1 : 0;
+    w.pinned += p.kind == RatioKind::kPinnedAtSameStop ? 1 : 0;
+    w.weaker += p.kind == RatioKind::kWeakerGlobalMinimum ? 1 : 0;
+    w.unexplained += p.kind == RatioKind::kUnexplained ? 1 : 0;
+    w.rematched += p.rematched ? 1 : 0;
+    w.lifted += p.rematched && p.ratio > 1.0 ? 1 : 0;
+    w.min_ratio = std::min(w.min_ratio, p.ratio);
+    w.max_ratio = std::max(w.max_ratio, p.ratio);
+  }
+  return w;
+}
+
+Studies runStudies(const Rhi4Model& model, const Planar3Model& arm3, const StudyOptions& options) {
+  Studies s;
+  s.home = homeScales(model);
+  s.example = runExample3(arm3);
+  s.free_case = runPalpation(model, FmeEllipsoidMode::kFree, {}, options.trials);
+  s.stiff_case = runPalpation(model, FmeEllipsoidMode::kStiff, {}, options.trials);
+  s.map_step = options.map_step;
+  s.map_radius = 0.95 * model.reach();
+  s.map = workspaceRatioMap(model, s.map_step, s.map_radius, Vec2(0.0, 1.0), options.threads);
+  s.workspace = summarize(s.map);
+  s.smooth = runTransition(model, true);
+  s.abrupt = runTransition(model, false);
+  return s;
+}
+
+experiments::ReproductionTable reproductionTable(const Studies& s) {
+  experiments::ReproductionTable table;
+  // The paper prints K and zeta rounded to 3 and 2 significant digits: pass within that rounding.
+  table.addWithin("003", "K = mu lambda_max(M_hat_0) at home", 123.0, s.home.K, 0.5, "");
+  table.addWithin("003", "zeta = lambda_min(M_hat_0) / mu at home", 3.3, s.home.zeta, 0.05, "");
+
+  const ExampleResult& ex = s.example;
+  table.addWithin("003", "3-DoF example: lambda_max(M_hat) at q0", 5.8, ex.K / 5.0, 0.05, "");
+  table.addWithin("003", "3-DoF example: lambda_min(M_hat) at q0", 2.6, ex.zeta * 5.0, 0.05, "");
+  table.addBound("003", "3-DoF example: stiff-optimized config renders F_e unsaturated", ex.configs[2].peak_force,
+                 "peak = 3.5 N (alpha = 1)", ex.configs[2].min_alpha >= 1.0, "N");
+  table.addBound("003", "3-DoF example: free-optimized config saturates (weaker than initial)",
+                 ex.configs[1].peak_force, "free < initial < 3.5 N",
+                 ex.configs[1].peak_force < ex.configs[0].peak_force && ex.configs[0].peak_force < 3.5, "N");
+
+  const PalpationCase& free_case = s.free_case;
+  const PalpationCase& stiff_case = s.stiff_case;
+  const double gain = stiff_case.peak_force / free_case.peak_force - 1.0;
+  // The maximum force follows from the kinematics, the torque limits and the configuration the
+  // controller settles in: 15 % of the paper's values allows for the unpublished base frame and joint
+  // limits on an otherwise exact kinematic model (docs/rhi.md: why the stiff case still misses it).
+  const std::string unpublished_frame =
+      "the peak force follows from where the arm's base sits relative to X0 and from its joint limits, "
+      "which paper 003 does not publish (docs: the RHI section); a dense scan of the self-motion "
+      "manifold at X0 finds no configuration near the paper's value for any joint limit tried";
+  table.addWithin("003", "Table I: max force along u, free ellipsoid", 5.674, free_case.peak_force, 0.15 * 5.674,
+                  "N");
+  table.addWithin("003", "Table I: max force along u, stiff ellipsoid", 8.564, stiff_case.peak_force,
+                  0.15 * 8.564, "N");
+  table.markNeedsData(unpublished_frame);
+  table.addWithin("003", "Table I: force capability gain stiff vs free", 51.0, 100.0 * gain, 15.0, "%");
+  table.markNeedsData(unpublished_frame);
+  table.addBound("003", "palpation stays within the (assumed) joint limits",
+                 std::min(free_case.limit_distance, stiff_case.limit_distance), "closest approach > 0",
+                 std::min(free_case.limit_distance, stiff_case.limit_distance) > 0.0, "rad");
+  // Inertia and friction depend on the assumed masses and friction: the paper's ordering carries
+  // over, the values are compared in the README only. The identifier itself is judged against the
+  // model's own values at the same configuration.
+  table.addBound("003", "Table I: apparent inertia free < stiff (paper 0.036 < 0.125 kg)",
+                 stiff_case.inertia_identified / free_case.inertia_identified, "ratio stiff/free > 1",
+                 stiff_case.inertia_identified > free_case.inertia_identified, "");
+  table.addBound("003", "Table I: back-drive viscous friction free < stiff (paper 0.295 < 0.633 N s/m)",
+                 stiff_case.friction_identified / free_case.friction_identified, "identified ratio stiff/free > 1",
+                 free_case.friction_identified > 0.0 && stiff_case.friction_identified > free_case.friction_identified,
+                 "");
+  for (const auto* c : {&free_case, &stiff_case}) {
+    // 15 %: the fit sees the arm's configuration change over +-2 cm and the null-space motion,
+    // which the single-configuration model values leave out.
+    table.addBound("003", "identified inertia matches model u^T Lambda u (" + c->name + ")", c->inertia_identified,
+                   "within 15 % of " + std::to_string(c->inertia_model),
+                   c->fit_valid && std::abs(c->inertia_identified / c->inertia_model - 1) < 0.15, "kg");
+    // The friction reference is the model's joint friction along u at the joint velocities that
+    // occurred (self-motion included), fitted with the same regressors; the reflection without
+    // self-motion, u^T J#^T B J# u, assumes q_dot = J# v, which the paused self-motion breaks (README).
+    table.addBound("003", "identified viscous friction matches the model's back-drive friction (" + c->name + ")",
+                   c->friction_identified, "within 25 % of " + std::to_string(c->friction_reference),
+                   c->fit_valid && std::abs(c->friction_identified / c->friction_reference - 1) < 0.25, "N s/m");
+    table.addBound("003", "identified Coulomb friction matches the model's back-drive friction (" + c->name + ")",
+                   c->coulomb_identified, "within 25 % of " + std::to_string(c->coulomb_reference),
+                   c->fit_valid && std::abs(c->coulomb_identified / c->coulomb_reference - 1) < 0.25, "N");
+  }
+
+  const WorkspaceSummary& w = s.workspace;
+  table.addBound("003", "Fig. 10: stiff/free force ratio over the workspace (minimum)", w.min_ratio,
+                 "> 1 at >= 95 % of the grid", static_cast<double>(w.above) >= 0.95 * static_cast<double>(w.valid), "");
+  // The paper's "> 1 everywhere", except where the dense scan shows the cost's global minima
+  // themselves weaker (a) or both matches sit at the same joint stop (b).
+  table.addBound("003", "Fig. 10: ratio > 1 wherever not explained by kinds (a), (b)",
+                 static_cast<double>(w.unexplained), "0 unexplained points", w.unexplained == 0, "points");
+
+  table.addWithin("003", "Fig. 11: transition duration rho |M_free - M_stiff|_F", 0.5, s.smooth.transition_duration,
+                  0.05, "s");
+  table.addBound("003", "Fig. 11: null-space torque jump, smoothed vs abrupt switch",
+                 s.smooth.max_null_torque_jump / s.abrupt.max_null_torque_jump, "ratio < 0.5",
+                 s.smooth.max_null_torque_jump < 0.5 * s.abrupt.max_null_torque_jump, "");
+  return table;
+}
+
+std::string summary(const Studies& s) {
+  std::ostringstream summary;
+  summary << std::fixed << std::setprecision(3);
+  summary << "Home ellipsoid scales (mu = 5): K = " << s.home.K << ", zeta = " << s.home.zeta << " (paper: 123, 3.3)\n";
+  const ExampleResult& ex = s.example;
+  summary << "3-DoF example: K = " << ex.K << ", zeta = " << ex.zeta << " (paper: 5 x 5.8, 0.2 x 2.6)\n";
+  for (const auto& c : ex.configs)
+    summary << "  " << std::setw(8) << c.name << ": q = [" << c.q.transpose() << "], peak output force "
+            << c.peak_force << " N of 3.5 N, min alpha " << c.min_alpha << "\n";
+  summary << "Palpation at X0 = [0.5, 0.1] m along u = [0, 1], K_e = 1000 N/m:\n";
+  for (const auto* c : {&s.free_case, &s.stiff_case})
+    summary << "  " << std::setw(5) << c->name << " ellipsoid: q = [" << c->q_settled.transpose()
+            << "], closest to a joint limit " << c->limit_distance << " rad, capability " << c->capability
+            << " N, peak rendered force " << c->peak_force << " N\n      identified along u: inertia "
+            << c->inertia_identified << " kg (model " << c->inertia_model << "), viscous " << c->friction_identified
+            << " N s/m (model back-drive " << c->friction_reference << ", reflected without self-motion "
+            << c->friction_model << "), Coulomb " << c->coulomb_identified << " N (model back-drive "
+            << c->coulomb_reference << ", reflected without self-motion " << c->coulomb_model << "), fit rms "
+            << c->fit_rms << " N\n";
+  const double gain = s.stiff_case.peak_force / s.free_case.peak_force - 1.0;
+  summary << "  force capability gain stiff vs free: " << 100.0 * gain << " % (paper: +51 %)\n";
+  const WorkspaceSummary& w = s.workspace;
+  summary << "Workspace map (" << w.valid << " points, grid " << s.map_step << " m, radius <= " << s.map_radius
+          << " m): stiff/free force ratio in [" << w.min_ratio << ", " << w.max_ratio << "], > 1 at " << w.above
+          << " of " << w.valid << "; ratio <= 1: " << w.weaker << " where the global minima are weaker (a), "
+          << w.pinned << " with both matches at the same joint stop (b), " << w.unexplained << " unexplained; "
+          << w.rematched << " points rematched from the dense scan's minima (" << w.lifted << " of them now > 1)\n";
+  const TransitionRun& smooth = s.smooth;
+  const TransitionRun& abrupt = s.abrupt;
+  summary << "Transition (rho |M_free - M_stiff|_F = " << smooth.transition_duration
+          << " s): largest null-space command step per tick " << smooth.max_null_torque_jump
+          << " N m with smoothing (t = " << smooth.jump_time << " s), " << abrupt.max_null_torque_jump
+          << " N m without (t = " << abrupt.jump_time << " s); applied null-space torque (after the limit scaling): "
+          << smooth.max_applied_null_jump << " vs " << abrupt.max_applied_null_jump
+          << " N m; joint-limit avoidance command step " << smooth.max_limit_torque_jump << " vs "
+          << abrupt.max_limit_torque_jump << " N m, closest approach to a joint limit " << smooth.limit_distance
+          << " vs " << abrupt.limit_distance << " rad\n";
+  return summary.str();
 }
 
 }  // namespace uhaptics::rhi

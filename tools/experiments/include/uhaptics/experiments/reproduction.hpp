@@ -5,7 +5,7 @@
 #include <string>
 #include <vector>
 
-namespace uhaptics::tools {
+namespace uhaptics::experiments {
 
 struct ReproductionRow {
   std::string paper;      // "000", "001", "003"
@@ -51,4 +51,4 @@ class ReproductionTable {
   std::vector<ReproductionRow> rows_;
 };
 
-}  // namespace uhaptics::tools
+}  // namespace uhaptics::experiments

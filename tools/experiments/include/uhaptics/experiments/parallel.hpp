@@ -10,7 +10,7 @@
 #include <thread>
 #include <vector>
 
-namespace uhaptics::tools {
+namespace uhaptics::experiments {
 
 inline unsigned hardwareThreads() { return std::max(1u, std::thread::hardware_concurrency()); }
 
@@ -40,4 +40,4 @@ void parallelFor(std::size_t n, unsigned threads, F&& fn) {
   if (error) std::rethrow_exception(error);
 }
 
-}  // namespace uhaptics::tools
+}  // namespace uhaptics::experiments

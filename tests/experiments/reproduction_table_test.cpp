@@ -1,11 +1,11 @@
-#include "uhaptics/tools/reproduction.hpp"
+#include "uhaptics/experiments/reproduction.hpp"
 
 #include <catch2/catch.hpp>
 #include <cmath>
 #include <cstdio>
 #include <fstream>
 
-using uhaptics::tools::ReproductionTable;
+using uhaptics::experiments::ReproductionTable;
 
 TEST_CASE("reproduction tables decide pass/fail and round-trip through CSV") {
   ReproductionTable t;
@@ -38,7 +38,7 @@ TEST_CASE("rows that need unpublished data are shown with their reason and do no
   CHECK_FALSE(t.rows()[1].pass);
   CHECK_FALSE(t.rows()[1].fails());
   CHECK(t.allPass());
-  CHECK(uhaptics::tools::resultWord(t.rows()[1]) == "needs data");
+  CHECK(uhaptics::experiments::resultWord(t.rows()[1]) == "needs data");
   CHECK(t.format().find("needs data: Table I force: the base frame is not published") != std::string::npos);
   const std::string path = "reproduction_needs_data_test.csv";
   t.writeCsv(path);

@@ -1,0 +1,24 @@
+#pragma once
+// The parameter files the devices ship with (devices/params; tests/CMakeLists.txt passes the folder
+// as UHAPTICS_PARAMS_DIR), and whole-file reads for tests that inspect or edit a file's text.
+#include <fstream>
+#include <sstream>
+#include <string>
+
+namespace uhaptics::test {
+
+/// devices/params.
+inline std::string paramsDir() { return UHAPTICS_PARAMS_DIR; }
+
+/// A file in devices/params, e.g. paramsPath("tau.json").
+inline std::string paramsPath(const std::string& file) { return paramsDir() + "/" + file; }
+
+/// The whole text of a file ("" when it cannot be read).
+inline std::string readFile(const std::string& path) {
+  std::ifstream in(path);
+  std::stringstream text;
+  text << in.rdbuf();
+  return text.str();
+}
+
+}  // namespace uhaptics::test
