@@ -85,9 +85,9 @@ TEST_CASE("non-finite commands are refused with a fault and a zero command", "[c
   CHECK(device.getLastFault() == uhaptics::Fault::kNonFiniteInput);
   CHECK(device.setForceAndTorque(cVector3d(0, 0, 0), cVector3d(INFINITY, 0, 0)) == C_ERROR);
   REQUIRE(device.setForce(cVector3d(0.0, 0.0, 20.0)));  // beyond the fixture's 10 N: saturated
-  CHECK(device.last_actuator_.z() == 10.0);
+  CHECK(device.plant().actuator.z() == 10.0);
   CHECK(device.getSessionStats().faults == 2);
-  CHECK(device.position_.allFinite());
+  CHECK(device.plant().position.allFinite());
 }
 
 TEST_CASE("a servo tick through the CHAI3D call allocates nothing", "[chai3d][device]") {

@@ -1,23 +1,54 @@
 #pragma once
 // Test fixture (not a product device): a 3-DoF point mass with viscous friction and per-axis force
-// saturation, enough to exercise everything cUhapticsDevice does around a device: the clock, the
-// scripted hand, statistics, faults, the CHAI3D contract. Its renderer is the identity (the
-// application's force goes straight to the actuators), so CHAI3D's own proxy forces are what the
-// mass feels.
+// limits, enough to exercise everything cUhapticsDevice does around a device: the servo cycle over
+// a sim joint I/O, the clock, the scripted hand, statistics, faults, the CHAI3D contract. Its
+// renderer is the identity (the application's force goes straight to the actuators, limited by the
+// joint I/O's safety stage), so CHAI3D's own proxy forces are what the mass feels.
 #include <algorithm>
 #include <cmath>
+#include <memory>
 
 #include "uhaptics/chai3d/CUhapticsDevice.hpp"
-#include "uhaptics/core/limits.hpp"
 
-class PointMassDevice : public chai3d::cUhapticsDevice {
+// The point mass as its own simulated plant: three prismatic joints, all actuated.
+class PointMassPlant final : public uhaptics::BoardPlant {
  public:
   static constexpr double kMass = 0.2;        // [kg]
   static constexpr double kFriction = 2.0;    // [N s/m]
+
+  int jointCount() const noexcept override { return 3; }
+  int actuatorCount() const noexcept override { return 3; }
+  void readJoints(double* positions) noexcept override {
+    Eigen::Map<uhaptics::Vec3> out(positions);
+    out = position;
+  }
+  bool readJointRates(double* rates) noexcept override {
+    Eigen::Map<uhaptics::Vec3> out(rates);
+    out = velocity;
+    return true;
+  }
+  void applyCommand(const double* efforts) noexcept override { actuator = Eigen::Map<const uhaptics::Vec3>(efforts); }
+  void setUserForce(const uhaptics::Vec3& force) noexcept override { user = force; }
+  void advance(double dt) noexcept override {
+    const uhaptics::Vec3 acceleration = (actuator + user - kFriction * velocity) / kMass;
+    velocity += dt * acceleration;  // semi-implicit Euler: stable for this stiffness and step
+    position += dt * velocity;
+  }
+
+  uhaptics::Vec3 position = uhaptics::Vec3::Zero();
+  uhaptics::Vec3 velocity = uhaptics::Vec3::Zero();
+  uhaptics::Vec3 actuator = uhaptics::Vec3::Zero();  // as applied, after the safety stage
+  uhaptics::Vec3 user = uhaptics::Vec3::Zero();
+};
+
+class PointMassDevice : public chai3d::cUhapticsDevice {
+ public:
+  static constexpr double kMass = PointMassPlant::kMass;
+  static constexpr double kFriction = PointMassPlant::kFriction;
   static constexpr double kMaxForce = 10.0;   // [N] per axis
 
   explicit PointMassDevice(const uhaptics::DeviceSelection& selection)
-      : cUhapticsDevice(0, selection, 1e-3) {
+      : cUhapticsDevice(0, selection, 1e-3, 3, 3) {
     setCommonSpecifications("point mass (test fixture)", false);
     m_specifications.m_maxLinearForce = kMaxForce;
     m_specifications.m_maxLinearStiffness = 2000.0;
@@ -27,33 +58,36 @@ class PointMassDevice : public chai3d::cUhapticsDevice {
   ~PointMassDevice() override { close(); }
 
   std::string getRendererName() const override { return "identity"; }
-  uhaptics::Vec3 position_ = uhaptics::Vec3::Zero();
-  uhaptics::Vec3 velocity_ = uhaptics::Vec3::Zero();
-  uhaptics::Vec3 last_actuator_ = uhaptics::Vec3::Zero();
+  /// The simulated point mass (valid while the device is open).
+  const PointMassPlant& plant() const { return *plant_; }
 
  protected:
-  void startBackend() override {
-    position_.setZero();
-    velocity_.setZero();
-    publish();
+  std::unique_ptr<uhaptics::JointIo> makeJointIo() override {
+    uhaptics::BoardSpec spec;
+    spec.descriptor.name = "point mass";
+    spec.descriptor.joints = 3;
+    spec.descriptor.actuators = 3;
+    std::fill(spec.descriptor.effort_limit.begin(), spec.descriptor.effort_limit.begin() + 3, kMaxForce);
+    spec.servo_rate_hz = spec.sample_rate_hz = 1000.0;
+    return uhaptics::makeSimJointIo(spec, [this] { return makeSimulatedPlant(); });
   }
-  void stopBackend() noexcept override { last_actuator_.setZero(); }
-  uhaptics::Fault servoTick(const ServoInput& input, double& output) noexcept override {
-    const double dt = input.dt;
-    last_actuator_ = input.force;
-    uhaptics::scaleIntoBox(last_actuator_, uhaptics::Vec3::Constant(kMaxForce));
-    output = last_actuator_.cwiseAbs().maxCoeff();
-    const uhaptics::Vec3 acceleration = (last_actuator_ + input.handForce - kFriction * velocity_) / kMass;
-    velocity_ += dt * acceleration;  // semi-implicit Euler: stable for this stiffness and step
-    position_ += dt * velocity_;
-    publish();
+  std::unique_ptr<uhaptics::BoardPlant> makeSimulatedPlant() override {
+    auto plant = std::make_unique<PointMassPlant>();
+    plant_ = plant.get();
+    return plant;
+  }
+  void resetRendering() override {}
+  void sense(const JointReading& reading) noexcept override {
+    m_state.position = Eigen::Map<const uhaptics::Vec3>(reading.positions);
+    m_state.linearVelocity = Eigen::Map<const uhaptics::Vec3>(reading.rates);
+    m_state.joints = m_state.position;  // three prismatic "joints"
+  }
+  uhaptics::Fault render(const ServoInput& input, double* efforts) noexcept override {
+    Eigen::Map<uhaptics::Vec3> out(efforts);
+    out = input.force;
     return uhaptics::Fault::kNone;
   }
 
  private:
-  void publish() noexcept {
-    m_state.position = position_;
-    m_state.linearVelocity = velocity_;
-    m_state.joints = position_;  // three prismatic "joints"
-  }
+  PointMassPlant* plant_ = nullptr;  // owned by the joint I/O
 };

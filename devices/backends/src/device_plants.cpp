@@ -15,7 +15,9 @@ FixedStepClock::FixedStepClock(double period, double max_catch_up) : period_(per
 long FixedStepClock::take(double dt) noexcept {
   if (!(dt > 0.0) || !std::isfinite(dt)) return 0;
   pending_ += dt;
-  const double steps = std::floor(pending_ / period_);
+  // A billionth of a period of slack: a caller whose dt is the period computed another way (1 / rate)
+  // gets one step per call, not 0 and then 2.
+  const double steps = std::floor(pending_ / period_ + 1e-9);
   pending_ -= steps * period_;
   if (steps > static_cast<double>(max_steps_)) {
     dropped_ += (steps - static_cast<double>(max_steps_)) * period_;

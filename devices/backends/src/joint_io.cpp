@@ -17,11 +17,18 @@ using Channels = std::array<double, wire::kMaxChannels>;
 // servo loop's, so a renderer behaves identically on every backend.
 class SimJointIo final : public JointIo {
  public:
-  SimJointIo(const DeviceDefinition& device, BoardSpec spec) : JointIo(std::move(spec), "sim"), device_(device) {}
+  SimJointIo(BoardSpec spec, std::function<std::unique_ptr<BoardPlant>()> make_plant)
+      : JointIo(std::move(spec), "sim"), make_plant_(std::move(make_plant)) {}
 
   void open() override {
     if (plant_) return;
-    plant_ = device_.make_plant(spec().params_path);
+    std::unique_ptr<BoardPlant> plant = make_plant_();
+    const DeviceDescriptor& d = spec().descriptor;
+    if (!plant || plant->jointCount() != d.joints || plant->actuatorCount() != d.actuators) {
+      throw Error("simulated '" + d.name + "': the plant does not have the board's " + std::to_string(d.joints) +
+                  " joints and " + std::to_string(d.actuators) + " actuators");
+    }
+    plant_ = std::move(plant);
   }
   void close() noexcept override {
     if (!plant_) return;
@@ -45,16 +52,23 @@ class SimJointIo final : public JointIo {
     enforceEffortLimits(u.data(), d.actuators, d.effort_limit.data());
     plant_->applyCommand(u.data());
   }
-  void advance(double dt) noexcept override {
-    if (!plant_) return;
+  Fault advance(double dt) noexcept override {
+    if (!plant_) return Fault::kNone;
     plant_->advance(dt);
     if (dt > 0.0 && std::isfinite(dt)) time_us_ = std::fmod(time_us_ + 1e6 * dt, 4294967296.0);  // wraps like a board clock
+    return plant_->lastFault();
+  }
+  bool movesOnlyInAdvance() const noexcept override { return true; }
+  bool readRates(double* rates) noexcept override { return plant_ && plant_->readJointRates(rates); }
+  bool readActual(double* positions) noexcept override { return plant_ && plant_->readActualJoints(positions); }
+  void setUserForce(const Vec3& force) noexcept override {
+    if (plant_) plant_->setUserForce(force);
   }
   std::uint32_t sampleTimeUs() const noexcept override { return static_cast<std::uint32_t>(std::llround(time_us_) & 0xffffffffLL); }
   std::string describe() const override { return spec().descriptor.name + ", sim"; }
 
  private:
-  const DeviceDefinition& device_;
+  std::function<std::unique_ptr<BoardPlant>()> make_plant_;
   double time_us_ = 0.0;
   std::unique_ptr<BoardPlant> plant_;
 };
@@ -115,7 +129,7 @@ class ServoJointIo final : public JointIo {
     std::copy(efforts, efforts + r.count, r.effort.begin());
     loop_->request(r);  // the servo loop's safety stage checks it before it leaves the host
   }
-  void advance(double) noexcept override {}
+  Fault advance(double) noexcept override { return Fault::kNone; }
   std::uint32_t sampleTimeUs() const noexcept override { return snapshot_.sample_time_us[0]; }
   ServoLoop* servoLoop() noexcept override { return loop_.get(); }
   std::string describe() const override {
@@ -150,6 +164,11 @@ void JointRateEstimator::update(const double* positions, int n, std::uint32_t sa
   std::copy(rate_.begin(), rate_.begin() + n, rates);
 }
 
+std::unique_ptr<JointIo> makeSimJointIo(BoardSpec spec, std::function<std::unique_ptr<BoardPlant>()> make_plant) {
+  if (!make_plant) throw Error("makeSimJointIo: no plant factory");
+  return std::make_unique<SimJointIo>(std::move(spec), std::move(make_plant));
+}
+
 std::vector<std::string> jointIoBackends() { return {"sim", "emulated", "usb"}; }
 
 std::unique_ptr<JointIo> makeJointIo(const std::string& device, const std::string& backend,
@@ -161,7 +180,10 @@ std::unique_ptr<JointIo> makeJointIo(const std::string& device, const std::strin
   if (options.params_dir.empty()) throw Error("makeJointIo: params_dir is required (the device parameter files)");
   BoardSpec spec = options.params_file.empty() ? boardSpec(definition, options.params_dir)
                                                : boardSpecFromFile(definition, options.params_file);
-  if (backend == "sim") return std::make_unique<SimJointIo>(definition, std::move(spec));
+  if (backend == "sim") {
+    const std::string path = spec.params_path;
+    return makeSimJointIo(std::move(spec), [&definition, path] { return definition.make_plant(path); });
+  }
   return std::make_unique<ServoJointIo>(definition, std::move(spec), backend, options.servo, options.renderer);
 }
 

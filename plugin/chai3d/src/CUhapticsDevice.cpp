@@ -1,7 +1,10 @@
 #include "uhaptics/chai3d/CUhapticsDevice.hpp"
 
+#include "uhaptics/backends/board_catalog.hpp"
+#include "uhaptics/backends/device_definition.hpp"
 #include "uhaptics/backends/params_location.hpp"
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstdio>
@@ -16,14 +19,20 @@ cVector3d toChai(const uhaptics::Vec3& v) { return cVector3d(v(0), v(1), v(2)); 
 }  // namespace
 
 cUhapticsDevice::cUhapticsDevice(unsigned int a_deviceNumber, const uhaptics::DeviceSelection& a_selection,
-                                 double a_servoPeriod)
+                                 double a_servoPeriod, int a_joints, int a_actuators)
     : cGenericHapticDevice(a_deviceNumber),
       m_selection(a_selection),
       m_servoPeriod(a_servoPeriod),
       m_handEnabled(a_selection.hand_enabled && a_selection.backend == "sim"),
+      m_joints(a_joints),
+      m_actuators(a_actuators),
       m_statsPath(a_selection.stats_path) {
   if (!(a_servoPeriod > 0.0) || !std::isfinite(a_servoPeriod)) {
     throw uhaptics::Error("servo period must be finite and > 0");
+  }
+  if (a_joints < 1 || a_joints > C_MAX_DOF || a_actuators < 1 || a_actuators > uhaptics::wire::kMaxChannels) {
+    throw uhaptics::Error("a device needs 1.." + std::to_string(C_MAX_DOF) + " joints and 1.." +
+                          std::to_string(uhaptics::wire::kMaxChannels) + " actuators");
   }
   m_deviceNumber = static_cast<int>(a_deviceNumber);  // cGenericDevice ignores its argument
   m_deviceAvailable = true;
@@ -64,6 +73,34 @@ double cUhapticsDevice::wallTime() const noexcept {
   return std::chrono::duration<double>(Clock::now().time_since_epoch()).count();
 }
 
+std::unique_ptr<uhaptics::JointIo> cUhapticsDevice::makeJointIo() {
+  uhaptics::JointIoOptions options;
+  options.params_dir = paramsDirectory();
+  if (m_selection.backend != "sim") return uhaptics::makeJointIo(m_selection.device, m_selection.backend, options);
+  const uhaptics::DeviceDefinition& definition = uhaptics::findDevice(m_selection.device);
+  return uhaptics::makeSimJointIo(uhaptics::boardSpec(definition, options.params_dir), [this] { return makeSimulatedPlant(); });
+}
+
+bool cUhapticsDevice::readJointsLocked(bool a_first) noexcept {
+  if (!m_io->read(m_positions.data())) return false;
+  if (a_first) m_rateEstimator.reset();
+  if (!m_io->readRates(m_rates.data())) {
+    m_rateEstimator.update(m_positions.data(), m_joints, m_io->sampleTimeUs(), m_rates.data());
+  }
+  JointReading reading;
+  reading.positions = m_positions.data();
+  reading.rates = m_rates.data();
+  reading.actual = m_io->readActual(m_actual.data()) ? m_actual.data() : m_positions.data();
+  reading.first = a_first;
+  sense(reading);
+  return true;
+}
+
+void cUhapticsDevice::commandZeroLocked() noexcept {
+  m_efforts.fill(0.0);
+  if (m_io) m_io->command(m_efforts.data());
+}
+
 bool cUhapticsDevice::open() {
   std::lock_guard<std::mutex> lock(m_mutex);
   if (m_deviceReady) return C_SUCCESS;
@@ -72,16 +109,31 @@ bool cUhapticsDevice::open() {
     // subclass has filled in its specification.
     m_hand = std::make_unique<uhaptics::ScriptedHand>(m_hand->options(), m_specifications.m_workspaceRadius,
                                                       uhaptics::Vec3::Zero());
-    if (m_selection.backend != "sim") {
-      uhaptics::JointIoOptions options;
-      options.params_dir = paramsDirectory();
-      m_board = uhaptics::makeJointIo(m_selection.device, m_selection.backend, options);
-      m_board->open();  // throws with what to do: no board found (and what was), permission, version
+    m_io = makeJointIo();
+    m_io->open();  // throws with what to do: no board found (and what was), permission, version
+    const uhaptics::DeviceDescriptor& d = m_io->spec().descriptor;
+    if (d.joints != m_joints || d.actuators != m_actuators) {
+      throw uhaptics::Error("'" + m_io->describe() + "' has " + std::to_string(d.joints) + " joints and " +
+                            std::to_string(d.actuators) + " actuators; device '" + m_selection.device + "' needs " +
+                            std::to_string(m_joints) + " and " + std::to_string(m_actuators));
     }
-    startBackend();
+    resetRendering();
+    // A board's servo loop connects in open(); its first STATE takes a few periods.
+    constexpr double kFirstReadingTimeout = 2.0;  // [s]
+    const auto deadline = Clock::now() + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(kFirstReadingTimeout));
+    while (!readJointsLocked(true)) {
+      commandZeroLocked();
+      if (Clock::now() > deadline) {
+        throw uhaptics::Error("no joint reading from '" + m_io->describe() + "' within " +
+                              std::to_string(kFirstReadingTimeout) + " s");
+      }
+      std::this_thread::sleep_for(std::chrono::milliseconds(1));
+    }
+    checkFirstReading();
+    m_sensedAfterAdvance = true;  // the first tick renders from this reading
   } catch (const std::exception& e) {
-    if (m_board) m_board->close();  // nothing half-open: no servo thread, nothing commanded
-    m_board.reset();
+    if (m_io) m_io->close();  // nothing half-open: no servo thread, nothing commanded
+    m_io.reset();
     std::fprintf(stderr, "uhaptics: cannot open device '%s' (backend %s): %s\n", m_selection.device.c_str(),
                  m_selection.backend.c_str(), e.what());
     return C_ERROR;
@@ -102,9 +154,10 @@ bool cUhapticsDevice::close() {
     std::lock_guard<std::mutex> lock(m_mutex);
     if (!m_deviceReady) return C_SUCCESS;
     m_deviceReady = false;
-    stopBackend();
-    if (m_board) m_board->close();  // zero effort, servo thread stopped, interface released
-    m_board.reset();
+    commandZeroLocked();
+    endSession();
+    m_io->close();  // zero effort, servo thread stopped, interface released
+    m_io.reset();
   }
   stopStatsWriter();
   writeStats(m_statsPath);
@@ -115,41 +168,7 @@ bool cUhapticsDevice::calibrate(bool) { return m_deviceReady; }
 
 uhaptics::ServoLoop* cUhapticsDevice::getServoLoop() {
   std::lock_guard<std::mutex> lock(m_mutex);
-  return m_board ? m_board->servoLoop() : nullptr;
-}
-
-bool cUhapticsDevice::readBoard(double* a_positions, std::uint32_t& a_sampleTimeUs) noexcept {
-  if (!m_board) return false;
-  if (!m_board->read(a_positions)) {
-    const std::array<double, uhaptics::wire::kMaxChannels> zero{};
-    m_board->command(zero.data());
-    return false;
-  }
-  a_sampleTimeUs = m_board->sampleTimeUs();
-  return true;
-}
-
-void cUhapticsDevice::commandBoard(const double* a_efforts) noexcept {
-  if (m_board) m_board->command(a_efforts);
-}
-
-void cUhapticsDevice::startBoard(int a_joints, int a_actuators, double* a_positions, double a_timeoutSeconds) {
-  const uhaptics::DeviceDescriptor& d = m_board->spec().descriptor;
-  if (d.joints != a_joints || d.actuators != a_actuators) {
-    throw uhaptics::Error("board '" + m_board->describe() + "' has " + std::to_string(d.joints) + " joints and " +
-                          std::to_string(d.actuators) + " actuators; device '" + m_selection.device + "' needs " +
-                          std::to_string(a_joints) + " and " + std::to_string(a_actuators));
-  }
-  // The servo loop connects in open(); its first STATE takes a few periods.
-  const auto deadline = Clock::now() + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(a_timeoutSeconds));
-  std::uint32_t sample_us = 0;
-  while (!readBoard(a_positions, sample_us)) {
-    if (Clock::now() > deadline) {
-      throw uhaptics::Error("no joint reading from '" + m_board->describe() + "' within " +
-                            std::to_string(a_timeoutSeconds) + " s");
-    }
-    std::this_thread::sleep_for(std::chrono::milliseconds(1));
-  }
+  return m_io ? m_io->servoLoop() : nullptr;
 }
 
 void cUhapticsDevice::setLockStep(bool a_lockStep) {
@@ -190,14 +209,39 @@ uhaptics::Fault cUhapticsDevice::getLastFault() {
 void cUhapticsDevice::tickLocked() noexcept {
   const double t = static_cast<double>(m_ticks) * m_servoPeriod;
   const bool sendForce = m_forcesEnabled;
-  ServoInput input;
-  input.force = sendForce ? m_commandForce : uhaptics::Vec3::Zero();
-  input.torque = sendForce ? m_commandTorque : uhaptics::Vec3::Zero();
-  input.handForce = m_handEnabled ? m_hand->force(t, m_state.position, m_state.linearVelocity) : uhaptics::Vec3::Zero();
-  input.dt = m_servoPeriod;
-  input.time = t;
+  uhaptics::Fault fault = uhaptics::Fault::kNone;
   double output = 0.0;
-  m_lastFault = servoTick(input, output);
+  const uhaptics::Vec3 seen = m_state.position;
+  // A board's newest sample now; a simulation's reading from right after its last step.
+  if (!m_sensedAfterAdvance && !readJointsLocked(false)) {
+    commandZeroLocked();
+    readingLost();
+    fault = uhaptics::Fault::kDeviceError;
+  } else {
+    ServoInput input;
+    input.force = sendForce ? m_commandForce : uhaptics::Vec3::Zero();
+    input.torque = sendForce ? m_commandTorque : uhaptics::Vec3::Zero();
+    input.seenPosition = seen;
+    input.dt = m_servoPeriod;
+    input.time = t;
+    fault = render(input, m_efforts.data());
+    bool finite = true;
+    for (int i = 0; i < m_actuators; ++i) finite = finite && std::isfinite(m_efforts[i]);
+    if (fault != uhaptics::Fault::kNone || !finite) {
+      if (fault == uhaptics::Fault::kNone) fault = uhaptics::Fault::kNonFiniteResult;
+      m_efforts.fill(0.0);
+    }
+    for (int i = 0; i < m_actuators; ++i) output = std::max(output, std::abs(m_efforts[i]));
+    m_io->command(m_efforts.data());
+  }
+  if (m_handEnabled) {
+    m_io->setUserForce(deviceToModelForce(m_hand->force(t, m_state.position, m_state.linearVelocity)));
+  }
+  const uhaptics::Fault backend = m_io->advance(m_servoPeriod);
+  if (fault == uhaptics::Fault::kNone) fault = backend;
+  // A simulation moved only now: sense its new state, which the application reads next.
+  m_sensedAfterAdvance = m_io->movesOnlyInAdvance() && readJointsLocked(false);
+  m_lastFault = fault;
   ++m_ticks;
   m_stats.recordTick(sendForce ? m_commandForce.norm() : 0.0, output, m_lastFault != uhaptics::Fault::kNone);
   const double radius = m_specifications.m_workspaceRadius;

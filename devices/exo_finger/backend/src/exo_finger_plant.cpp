@@ -12,6 +12,10 @@ ExoFingerBoardPlant::ExoFingerBoardPlant(ExoFingerModel model, const Options& op
            ExoFingerSimOptions{options.sample_rate_hz, true}),
       clock_(1.0 / options.sample_rate_hz) {}
 
+ExoFingerBoardPlant::ExoFingerBoardPlant(std::unique_ptr<const ExoFingerModel> model, FingerTrajectory trajectory,
+                                         const ExoFingerSimOptions& sim)
+    : model_(std::move(model)), sim_(*model_, std::move(trajectory), sim), clock_(1.0 / sim.update_rate_hz) {}
+
 void ExoFingerBoardPlant::readJoints(double* positions) noexcept {
   const ExoFingerState& s = sim_.state();
   positions[0] = s.q(0);

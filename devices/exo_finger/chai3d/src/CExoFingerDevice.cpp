@@ -17,7 +17,7 @@ constexpr double kContactThreshold = 0.05;
 }  // namespace
 
 cExoFingerDevice::cExoFingerDevice(unsigned int a_deviceNumber, const uhaptics::DeviceSelection& a_selection)
-    : cUhapticsDevice(a_deviceNumber, a_selection, 1.0 / 500.0),
+    : cUhapticsDevice(a_deviceNumber, a_selection, 1.0 / 500.0, Model::kJoints, Model::kActuated),
       m_model(std::make_unique<Model>(Model::load(Model::defaultParamsPath(paramsDirectory())))),
       m_couplingStiffness(a_selection.option("coupling_stiffness", 1.0, 1e-3, 100.0)) {
   const Model& model = *m_model;
@@ -89,21 +89,12 @@ void cExoFingerDevice::updateState(double a_dt) noexcept {
   m_state.joints = m_data.q;  // l_x [m], q_B [rad]
 }
 
-void cExoFingerDevice::startBackend() {
+std::unique_ptr<uhaptics::BoardPlant> cExoFingerDevice::makeSimulatedPlant() {
   const Model& model = *m_model;
-  m_renderer->reset();
-  m_actuator.setZero();
-  if (hasBoard()) {  // the board's finger moves by itself (emulated: paper 000's flexion-extension)
-    m_sim.reset();
-    Model::JointVector q;
-    startBoard(Model::kJoints, Model::kActuated, q.data());
-    uhaptics::update(model, q, m_data);
-    updateState(0.0);
-    return;
-  }
   // The user, for half an hour (the sim's longest; then the finger rests): with a hand path chosen
   // for the scene, the finger whose fingertip follows it as closely as the finger can; otherwise
-  // paper 000's flexion-extension cycles; a finger held still when the hand is off.
+  // paper 000's flexion-extension cycles; a finger held still when the hand is off. The finger is
+  // position-driven: the hand's force has nothing to move.
   const auto fingerTrajectory = [&]() {
     const Model::TaskVector rest = 0.5 * (model.taskLower() + model.taskUpper());
     if (!getScriptedHandEnabled()) return uhaptics::FingerTrajectory::fromSamples(model, {0.0, 1.0}, {rest, rest}, "finger at rest");
@@ -120,37 +111,31 @@ void cExoFingerDevice::startBackend() {
         },
         m_selection.hand.lap_time, 1800.0, 50.0);
   };
-  uhaptics::FingerTrajectory trajectory = fingerTrajectory();
   uhaptics::ExoFingerSimOptions options;
   options.update_rate_hz = 1.0 / getServoPeriod();
   options.force_loop_lag = m_selection.option("force_loop_lag", 1.0, 0.0, 1.0) != 0.0;
-  m_sim = std::make_unique<uhaptics::ExoFingerSim>(model, std::move(trajectory), options);
-  uhaptics::update(model, m_sim->state().q, m_data);
-  updateState(0.0);
+  auto plant = std::make_unique<uhaptics::ExoFingerBoardPlant>(std::make_unique<const Model>(model), fingerTrajectory(), options);
+  m_plant = plant.get();  // owned by the joint I/O until close()
+  return plant;
 }
 
-void cExoFingerDevice::stopBackend() noexcept {
+void cExoFingerDevice::resetRendering() {
+  m_renderer->reset();
+  m_actuator.setZero();
+}
+
+void cExoFingerDevice::endSession() noexcept {
   m_actuator.setZero();
   m_fingerTorqueCommand.setZero();
-  if (m_sim) m_sim->command(m_actuator);
-  commandBoard(m_actuator.data());
+  m_plant = nullptr;
 }
 
-uhaptics::Fault cExoFingerDevice::servoTick(const ServoInput& a_input, double& a_outputMagnitude) noexcept {
-  // The finger is position-driven: the hand's force (and any torque) has nothing to move.
-  const Model& model = *m_model;
-  a_outputMagnitude = 0.0;
-  Model::JointVector q;
-  if (hasBoard()) {
-    std::uint32_t sample_us = 0;
-    if (!readBoard(q.data(), sample_us)) {  // zero commanded: link down or host watchdog
-      m_actuator.setZero();
-      return uhaptics::Fault::kDeviceError;
-    }
-  } else {
-    q = m_sim->state().q;
-  }
-  uhaptics::update(model, q, m_data);
+void cExoFingerDevice::sense(const JointReading& a_reading) noexcept {
+  uhaptics::update(*m_model, Eigen::Map<const Model::JointVector>(a_reading.positions), m_data);
+  updateState(a_reading.first ? 0.0 : getServoPeriod());
+}
+
+uhaptics::Fault cExoFingerDevice::render(const ServoInput& a_input, double* a_efforts) noexcept {
   // The proxy pull in the finger plane (device y, z) -> hand frame -> finger-joint torque.
   const uhaptics::Vec2 f_hand = deviceToPlanar(a_input.force);
   const bool pulled = !f_hand.isZero(0.0);
@@ -167,7 +152,7 @@ uhaptics::Fault cExoFingerDevice::servoTick(const ServoInput& a_input, double& a
   const bool solves = !(x_proxy - m_data.x).isZero(0.0) && x_proxy.allFinite() && m_data.q.allFinite() &&
                       m_data.in_range && m_data.x.allFinite() && m_data.J.allFinite();
   const uhaptics::Fault fault = m_renderer->tick(m_data.q, x_proxy, m_actuator);
-  a_outputMagnitude = std::abs(m_actuator(0));
+  const double magnitude = std::abs(m_actuator(0));
   if (solves) {
     sessionStats().count(m_figureSolves);
     const double distance = (fingertip(x_proxy) - m_data.points.fingertip).norm();  // probe f(q) to proxy
@@ -180,17 +165,10 @@ uhaptics::Fault cExoFingerDevice::servoTick(const ServoInput& a_input, double& a
       sessionStats().count(m_figureContactTicks);
     }
   }
-  sessionStats().observeMaximum(m_figureActuatorForce, a_outputMagnitude);
-  if (hasBoard()) {
-    commandBoard(m_actuator.data());
-    updateState(a_input.dt);  // this reading; the command shows in the next
-    return fault;
-  }
-  m_sim->command(m_actuator);
-  m_sim->step();
-  uhaptics::update(model, m_sim->state().q, m_data);
-  updateState(a_input.dt);
-  return fault != uhaptics::Fault::kNone ? fault : m_sim->state().fault;
+  sessionStats().observeMaximum(m_figureActuatorForce, magnitude);
+  Eigen::Map<Model::ActuatorVector> out(a_efforts);
+  out = m_actuator;
+  return fault;
 }
 
 uhaptics::Vec2 cExoFingerDevice::getFingerAngles() {
@@ -224,7 +202,7 @@ uhaptics::Vec2 cExoFingerDevice::getFingerJointTorque() {
 
 uhaptics::Vec2 cExoFingerDevice::getFingerTorque() {
   std::lock_guard<std::mutex> lock(deviceMutex());
-  return m_sim ? m_sim->state().finger_torque : uhaptics::Vec2::Zero();
+  return m_plant ? m_plant->sim().state().finger_torque : uhaptics::Vec2::Zero();
 }
 
 }  // namespace chai3d

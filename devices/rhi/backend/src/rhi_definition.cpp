@@ -3,7 +3,7 @@
 #include <limits>
 
 #include "uhaptics/backends/board_catalog.hpp"
-#include "uhaptics/backends/rhi_plant.hpp"
+#include "uhaptics/backends/planar_linkage_plant.hpp"
 #include "uhaptics/models/param_file.hpp"
 #include "uhaptics/models/planar_linkage_model.hpp"
 
@@ -24,7 +24,7 @@ DeviceDefinition definition() {
     spec.descriptor = DeviceDescriptor::fromParams(file, wire::DeviceType{self.wire_code}, self.title, 4, 4, limits.data());
   };
   d.make_plant = [](const std::string& path) -> std::unique_ptr<BoardPlant> {
-    return std::make_unique<RhiBoardPlant>(Rhi4Model::fromFile(path, "rhi4"), RhiBoardPlant::Options{});
+    return std::make_unique<PlanarLinkagePlant<4>>(Rhi4Model::fromFile(path, "rhi4"), PlanarLinkagePlant<4>::Options{});
   };
   return d;
 }

@@ -3,6 +3,8 @@
 #include <Eigen/Eigenvalues>
 #include <cmath>
 
+#include "uhaptics/backends/planar_linkage_plant.hpp"
+
 namespace chai3d {
 namespace {
 
@@ -35,7 +37,7 @@ uhaptics::FmeControllerOptions<2> optionsFrom(const uhaptics::DeviceSelection& s
 }  // namespace
 
 cRedundantPlanarDevice::cRedundantPlanarDevice(unsigned int a_deviceNumber, const uhaptics::DeviceSelection& a_selection)
-    : cUhapticsDevice(a_deviceNumber, a_selection, 1e-3),
+    : cUhapticsDevice(a_deviceNumber, a_selection, 1e-3, Model::kJoints, Model::kJoints),
       m_model(std::make_unique<Model>(Model::fromFile(paramsDirectory() + "/rhi4.json", "rhi4"))) {
   const Model& model = *m_model;
   try {
@@ -72,58 +74,33 @@ cRedundantPlanarDevice::cRedundantPlanarDevice(unsigned int a_deviceNumber, cons
 
 cRedundantPlanarDevice::~cRedundantPlanarDevice() { close(); }
 
-void cRedundantPlanarDevice::startBackend() {
+std::unique_ptr<uhaptics::BoardPlant> cRedundantPlanarDevice::makeSimulatedPlant() {
+  using Plant = uhaptics::PlanarLinkagePlant<Model::kJoints>;
+  Plant::Options options;
+  options.hand_stiffness = 0.0;  // no grip: the scripted hand is the user
+  options.hand_damping = 0.0;
+  return std::make_unique<Plant>(*m_model, options);
+}
+
+void cRedundantPlanarDevice::resetRendering() {
   m_controller->reset();  // free-motion ellipsoid; the null-space torque ramps up from zero
   m_stiffTarget = m_controller->status().omega_target == 0.0;
   m_tau.setZero();
-  m_qd.setZero();
-  m_rate.reset();
-  if (hasBoard()) {
-    m_sim.reset();
-    startBoard(Model::kJoints, Model::kJoints, m_q.data());
-  } else {
-    m_sim = std::make_unique<uhaptics::SimulatedPlanarLinkage<4>>(*m_model);
-    m_sim->reset(m_model->home());
-    m_q = m_sim->position();
-  }
+}
+
+void cRedundantPlanarDevice::sense(const JointReading& a_reading) noexcept {
+  m_q = Eigen::Map<const Model::JointVector>(a_reading.positions);
+  m_qd = Eigen::Map<const Model::JointVector>(a_reading.rates);
   updateState();
 }
 
-void cRedundantPlanarDevice::stopBackend() noexcept {
-  m_tau.setZero();
-  commandBoard(m_tau.data());
-}
-
-uhaptics::Fault cRedundantPlanarDevice::servoTick(const ServoInput& a_input, double& a_outputMagnitude) noexcept {
-  a_outputMagnitude = 0.0;
-  if (hasBoard()) {
-    std::uint32_t sample_us = 0;
-    if (!readBoard(m_q.data(), sample_us)) {  // zero commanded: link down or host watchdog
-      m_tau.setZero();
-      return uhaptics::Fault::kDeviceError;
-    }
-    m_rate.update(m_q.data(), Model::kJoints, sample_us, m_qd.data());
-  } else {
-    m_q = m_sim->position();
-    m_qd = m_sim->velocity();
-  }
+uhaptics::Fault cRedundantPlanarDevice::render(const ServoInput& a_input, double* a_efforts) noexcept {
   // A planar device: only the in-plane force is rendered (no torque, x not actuated).
   const uhaptics::Fault fault = m_controller->tick(a_input.time, m_q, m_qd, deviceToPlanar(a_input.force), m_tau);
-  a_outputMagnitude = m_tau.cwiseAbs().maxCoeff();
   recordFigures(m_controller->status());
-  uhaptics::Fault backend_fault = uhaptics::Fault::kNone;
-  if (hasBoard()) {
-    commandBoard(m_tau.data());
-  } else {
-    uhaptics::EndEffectorLoad hand;
-    hand.bias = deviceToPlanar(a_input.handForce);  // constant over the period
-    m_sim->setLoad(hand);
-    backend_fault = m_sim->step(m_tau, a_input.dt);
-    m_q = m_sim->position();
-    m_qd = m_sim->velocity();
-  }
-  updateState();
-  return fault != uhaptics::Fault::kNone ? fault : backend_fault;
+  Eigen::Map<Model::JointVector> out(a_efforts);
+  out = m_tau;
+  return fault;
 }
 
 void cRedundantPlanarDevice::recordFigures(const Controller::Status& a_status) noexcept {
@@ -140,7 +117,7 @@ void cRedundantPlanarDevice::recordFigures(const Controller::Status& a_status) n
 }
 
 void cRedundantPlanarDevice::updateState() noexcept {
-  // Kinematics of the latest joint state (the simulation's own end-effector state on sim).
+  // Kinematics of the latest joint reading.
   uhaptics::Vec2 x;
   Model::Jacobian J;
   m_model->forward(m_q, x);

@@ -9,6 +9,7 @@ SimulatedTauOptions tauOptions(const TauBoardPlant::Options& o) {
   SimulatedTauOptions s;
   s.hand = o.hand;
   s.quantize = o.quantize;
+  s.tool_damping = o.tool_damping;
   s.tool_rotational_damping = o.tool_rotational_damping;
   return s;
 }
@@ -19,12 +20,22 @@ TauBoardPlant::TauBoardPlant(TauModel model, const Options& options)
       sim_(*model_, tauOptions(options)),
       clock_(model_->servoPeriod()) {
   sim_.reset(model_->homeJoints());
-  sim_.setHand(model_->homePose().head<3>(), Vec3::Zero(), Vec3::Zero());
+  if (options.hold_tool) {
+    sim_.setHand(model_->homePose().head<3>(), Vec3::Zero(), Vec3::Zero());
+  } else {
+    sim_.detachHand();
+  }
 }
 
 void TauBoardPlant::advance(double dt) noexcept {
-  for (long n = clock_.take(dt); n > 0; --n)
-    if (sim_.step(command_, Vec3::Zero()) != Fault::kNone) ++faults_;
+  fault_ = Fault::kNone;
+  for (long n = clock_.take(dt); n > 0; --n) {
+    const Fault f = sim_.step(command_, user_force_);
+    if (f != Fault::kNone) {
+      fault_ = f;
+      ++faults_;
+    }
+  }
 }
 
 }  // namespace uhaptics

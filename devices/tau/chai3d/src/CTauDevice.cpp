@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "uhaptics/backends/tau_plant.hpp"
 #include "uhaptics/core/limits.hpp"
 #include "uhaptics/models/tau_kinematics.hpp"
 #include "uhaptics/renderers/tau_wall_design.hpp"
@@ -40,7 +41,7 @@ uhaptics::TauContactClassifier::WallMode classifierMode(int a_mode) {
 }  // namespace
 
 cTauDevice::cTauDevice(unsigned int a_deviceNumber, const uhaptics::DeviceSelection& a_selection)
-    : cUhapticsDevice(a_deviceNumber, a_selection, 1e-3),
+    : cUhapticsDevice(a_deviceNumber, a_selection, 1e-3, 6, 6),
       m_model(std::make_unique<uhaptics::TauModel>(uhaptics::TauModel::load(paramsDirectory() + "/tau.json"))),
       m_toolDamping(a_selection.option("tool_damping", 0.0, 0.0, 50.0)),
       m_classifier(classifierOptions(a_selection, getServoPeriod())) {
@@ -51,6 +52,7 @@ cTauDevice::cTauDevice(unsigned int a_deviceNumber, const uhaptics::DeviceSelect
   m_wallMode = static_cast<int>(a_selection.option("wall", 0.0, 0.0, 2.0));
   m_centre = model.homePose().head<3>();
   m_data = std::make_unique<uhaptics::TauData>(model);
+  m_actualData = std::make_unique<uhaptics::TauData>(model);
   // LQR gains at the workspace centre (paper 001 linearizes at one operating point).
   uhaptics::LqrWallRenderer::Options wallOptions;
   wallOptions.keep_direction = true;
@@ -82,7 +84,8 @@ cTauDevice::cTauDevice(unsigned int a_deviceNumber, const uhaptics::DeviceSelect
   m_specifications.m_maxLinearDamping = 4.0;       // paper 001: Colgate's bound b > K T / 2 for 6000 N/m at 1 kHz
   m_specifications.m_maxAngularDamping = 0.01;     // assumed
   m_specifications.m_workspaceRadius = model.workspaceHalfSide();  // the 50 mm cube's inscribed sphere
-  updateState();  // at home until opened
+  m_q = model.homeJoints();
+  updateState(*m_data, m_q);  // at home, at rest until opened
 
   using Kind = uhaptics::RendererFigure::Kind;
   uhaptics::SessionStats& stats = sessionStats();
@@ -148,36 +151,55 @@ void cTauDevice::clearContactSurface() {
   if (m_classifier.endContact()) sessionStats().count(m_figReleases);
 }
 
-void cTauDevice::startBackend() {
+std::unique_ptr<uhaptics::BoardPlant> cTauDevice::makeSimulatedPlant() {
+  uhaptics::TauBoardPlant::Options options;
+  options.hold_tool = false;  // the scripted hand's force is the user
+  options.tool_damping = m_toolDamping;
+  // The handle's rotational damping (the baseline device's 0.01 N m s/rad, as in tau-study): CHAI3D
+  // tools command no torque and the scripted hand holds no orientation, so without it the
+  // long-rod platform drifts in orientation under a push until a leg leaves its range.
+  options.tool_rotational_damping = m_selection.option("tool_rotational_damping", 0.01, 0.0, 1.0);
+  return std::make_unique<uhaptics::TauBoardPlant>(*m_model, options);
+}
+
+void cTauDevice::resetRendering() {
   m_lqr->reset();
   m_data->pose = m_model->homePose();  // forward kinematics' first guess
+  m_actualData->pose = m_model->homePose();
   m_classifier.reset();
   m_lqrEngaged = false;
   m_tau.setZero();
-  m_qd.setZero();
-  m_rate.reset();
-  if (hasBoard()) {
-    m_sim.reset();
-    startBoard(6, 6, m_q.data());
-    if (m_model->forward(m_q, *m_data) != uhaptics::Fault::kNone) {
-      throw uhaptics::Error("TAU: the board's first joint reading does not assemble (forward kinematics fails)");
-    }
-  } else {
-    uhaptics::SimulatedTauOptions options;
-    options.tool_damping = m_toolDamping;
-    // The handle's rotational damping (the baseline device's 0.01 N m s/rad, as in tau-study): CHAI3D
-    // tools command no torque and the scripted hand holds no orientation, so without it the
-    // long-rod platform drifts in orientation under a push until a leg leaves its range.
-    options.tool_rotational_damping = m_selection.option("tool_rotational_damping", 0.01, 0.0, 1.0);
-    m_sim = std::make_unique<uhaptics::SimulatedTau>(*m_model, options);
-    m_sim->reset(m_model->homeJoints());
-    m_sim->detachHand();  // the scripted hand's force arrives as the external force
-    m_q = m_sim->encoderReading();
-  }
-  updateState();
 }
 
-void cTauDevice::stopBackend() noexcept {
+void cTauDevice::sense(const JointReading& a_reading) noexcept {
+  m_q = Eigen::Map<const uhaptics::Vec6>(a_reading.positions);
+  m_qd = Eigen::Map<const uhaptics::Vec6>(a_reading.rates);
+  m_senseFault = m_model->forward(m_q, *m_data);  // the wall works from the encoders
+  if (m_senseFault != uhaptics::Fault::kNone) return;  // the last assembled state stays
+  if (a_reading.actual == a_reading.positions) {
+    updateState(*m_data, m_q);
+    return;
+  }
+  // A simulated TAU shows the scene the tool where it is (its encoders quantize the joints by
+  // 1.5 mrad, 0.1 mm at the tool, which the contact classifier's stiffness probe would read as
+  // surface motion; docs/tau.md).
+  const uhaptics::Vec6 actual = Eigen::Map<const uhaptics::Vec6>(a_reading.actual);
+  if (m_model->forward(actual, *m_actualData) == uhaptics::Fault::kNone) updateState(*m_actualData, actual);
+}
+
+void cTauDevice::checkFirstReading() {
+  if (m_senseFault != uhaptics::Fault::kNone) {
+    throw uhaptics::Error("TAU: the first joint reading does not assemble (forward kinematics fails)");
+  }
+}
+
+void cTauDevice::readingLost() noexcept {
+  m_tau.setZero();
+  m_lqrEngaged = false;
+  m_classifier.holdLost();
+}
+
+void cTauDevice::endSession() noexcept {
   m_tau.setZero();
   m_lqrEngaged = false;
   m_classifier.endContact();  // no release counted: the session ends
@@ -204,24 +226,11 @@ void cTauDevice::recordFigures(const uhaptics::TauContactClassifier::Events& a_e
   }
 }
 
-uhaptics::Fault cTauDevice::servoTick(const ServoInput& a_input, double& a_outputMagnitude) noexcept {
+uhaptics::Fault cTauDevice::render(const ServoInput& a_input, double* a_efforts) noexcept {
   // a_input.dt is the model's servo period (checked equal at construction).
   const uhaptics::TauModel& model = *m_model;
-  const uhaptics::Vec3 reported = m_state.position + m_centre;  // model frame
-  a_outputMagnitude = 0.0;
-  if (hasBoard()) {
-    std::uint32_t sample_us = 0;
-    if (!readBoard(m_q.data(), sample_us)) {  // zero commanded: link down or host watchdog
-      m_tau.setZero();
-      m_lqrEngaged = false;
-      m_classifier.holdLost();
-      return uhaptics::Fault::kDeviceError;
-    }
-    m_rate.update(m_q.data(), 6, sample_us, m_qd.data());
-  } else {
-    m_q = m_sim->encoderReading();
-  }
-  uhaptics::Fault fault = model.forward(m_q, *m_data);
+  const uhaptics::Vec3 reported = a_input.seenPosition + m_centre;  // model frame
+  uhaptics::Fault fault = m_senseFault;
   if (fault == uhaptics::Fault::kNone) {
     if (m_explicitSurface) {
       m_classifier.follow(m_explicit);
@@ -261,40 +270,22 @@ uhaptics::Fault cTauDevice::servoTick(const ServoInput& a_input, double& a_outpu
     m_classifier.holdLost();
     if (fault == uhaptics::Fault::kNone) fault = uhaptics::Fault::kNonFiniteResult;
   }
-  uhaptics::Fault backend_fault = uhaptics::Fault::kNone;
-  if (hasBoard()) {
-    commandBoard(m_tau.data());
-  } else {
-    backend_fault = m_sim->step(m_tau, a_input.handForce);
-  }
-  a_outputMagnitude = m_tau.cwiseAbs().maxCoeff();
-  updateState();
-  return fault != uhaptics::Fault::kNone ? fault : backend_fault;
+  Eigen::Map<uhaptics::Vec6> out(a_efforts);
+  out = m_tau;
+  return fault;
 }
 
-void cTauDevice::updateState() noexcept {
-  if (hasBoard()) {  // the board's reading: pose by forward kinematics, rates by the joints' differences
-    const uhaptics::Vec6& pose = m_data->pose;
-    const uhaptics::Vec6 rates = m_data->J * m_qd;
-    m_state.position = pose.head<3>() - m_centre;
-    m_state.rotation = uhaptics::PoseRotation(pose).R;
-    m_state.linearVelocity = rates.head<3>();
-    m_state.angularVelocity = rates.tail<3>();  // pose-angle rates, see below
-    m_state.joints = m_q;
-    return;
-  }
-  if (!m_sim) {  // before the first open(): at home, at rest
-    m_state.position = m_model->homePose().head<3>() - m_centre;
-    m_state.joints = m_model->homeJoints();
-    return;
-  }
-  const uhaptics::Vec6& pose = m_sim->pose();
+void cTauDevice::updateState(const uhaptics::TauData& a_data, const uhaptics::Vec6& a_q) noexcept {
+  // The pose by forward kinematics (before the first reading: home, at rest); rates through the
+  // Jacobian. The angular rates are pose-angle rates; within TAU's +-10 deg they are the angular
+  // velocity to within 2 %.
+  const uhaptics::Vec6& pose = a_data.pose;
+  const uhaptics::Vec6 rates = a_data.J * m_qd;
   m_state.position = pose.head<3>() - m_centre;
   m_state.rotation = uhaptics::PoseRotation(pose).R;
-  m_state.linearVelocity = m_sim->toolVelocity();
-  // Pose-angle rates; within TAU's +-10 deg they are the angular velocity to within 2 %.
-  m_state.angularVelocity = (m_data->J * m_sim->qd()).tail<3>();
-  m_state.joints = m_sim->q();
+  m_state.linearVelocity = rates.head<3>();
+  m_state.angularVelocity = rates.tail<3>();
+  m_state.joints = a_q;
 }
 
 }  // namespace chai3d

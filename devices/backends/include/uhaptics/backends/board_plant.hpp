@@ -7,6 +7,8 @@
 // All methods are called from one thread (the emulator's), never allocate and never throw.
 #include <array>
 
+#include "uhaptics/core/fault.hpp"
+#include "uhaptics/core/types.hpp"
 #include "uhaptics/protocol/wire_protocol.hpp"
 
 namespace uhaptics {
@@ -22,6 +24,28 @@ class BoardPlant {
   virtual void applyCommand(const double* efforts) noexcept = 0;
   /// Integrates the plant over dt seconds with the held command.
   virtual void advance(double dt) noexcept = 0;
+
+  // What a simulation offers beyond a board (the "sim" joint I/O passes it on; the board emulator
+  // does not use it).
+  /// The joint rates the simulation knows exactly, jointCount() entries; false when it has none
+  /// (the caller then differentiates the positions, as it does for a board).
+  virtual bool readJointRates(double* rates) noexcept {
+    (void)rates;
+    return false;
+  }
+  /// The joint positions as they are, without the sensors' error (encoder quantization),
+  /// jointCount() entries; false when the plant models no sensor error.
+  virtual bool readActualJoints(double* positions) noexcept {
+    (void)positions;
+    return false;
+  }
+  /// The force [N] of a user the caller simulates (a CHAI3D session's scripted hand) on the end
+  /// effector, in the device model's task frame (planar devices: x, y), held until the next call.
+  /// Only plants made without a user of their own take it; a position-driven user (the finger in
+  /// the exoskeleton) ignores it.
+  virtual void setUserForce(const Vec3& force) noexcept { (void)force; }
+  /// The simulation's fault in the last advance() (kNone: it stepped as modelled).
+  virtual Fault lastFault() const noexcept { return Fault::kNone; }
 };
 
 /// Decoupled mass-spring-dampers, one per actuator (m q'' + b q' + k q = u); sensed-only joints

@@ -18,6 +18,7 @@
 // read/command/advance belong to one thread (the caller's servo or haptic thread).
 #include <array>
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <string>
 #include <vector>
@@ -63,8 +64,27 @@ class JointIo {
   virtual std::uint32_t sampleTimeUs() const noexcept = 0;
   /// Efforts (spec().descriptor.actuators values), held until the next call.
   virtual void command(const double* efforts) noexcept = 0;
-  /// sim: advances the simulation by dt. emulated/usb: nothing (the device runs on its own clock).
-  virtual void advance(double dt) noexcept = 0;
+  /// sim: advances the simulation by dt and returns its fault. emulated/usb: nothing (the device
+  /// runs on its own clock), kNone.
+  virtual Fault advance(double dt) noexcept = 0;
+  /// Whether the device moves only in advance() (sim): a reading taken right after it is the newest
+  /// there will be until the next advance(). A board moves on its own clock instead.
+  virtual bool movesOnlyInAdvance() const noexcept { return false; }
+  /// The joint rates of the last read() when the backend knows them exactly (sim); false otherwise
+  /// (the caller then differentiates positions over sampleTimeUs(), e.g. with JointRateEstimator).
+  virtual bool readRates(double* rates) noexcept {
+    (void)rates;
+    return false;
+  }
+  /// sim: the joint positions of the last read() as they are, without the simulated sensors' error
+  /// (BoardPlant::readActualJoints); false when there is no such thing (a board, an ideal sensor).
+  virtual bool readActual(double* positions) noexcept {
+    (void)positions;
+    return false;
+  }
+  /// sim: the force [N] of a user the caller simulates on the end effector, in the device model's
+  /// task frame (BoardPlant::setUserForce). emulated/usb: ignored (the board's device has its user).
+  virtual void setUserForce(const Vec3& force) noexcept { (void)force; }
 
   /// The servo loop behind emulated/usb (statistics, events); nullptr for sim or while closed.
   virtual ServoLoop* servoLoop() noexcept { return nullptr; }
@@ -97,6 +117,11 @@ class JointRateEstimator {
   std::uint32_t previous_us_ = 0;
   bool have_previous_ = false;
 };
+
+/// The "sim" joint I/O over a plant the caller makes (on open(), again after each close()): a device
+/// class whose simulation needs a user or options of its own, or a test fixture. spec describes
+/// the plant (counts, effort limits for the safety stage).
+std::unique_ptr<JointIo> makeSimJointIo(BoardSpec spec, std::function<std::unique_ptr<BoardPlant>()> make_plant);
 
 /// Backends the factory offers, in the order to list them.
 std::vector<std::string> jointIoBackends();

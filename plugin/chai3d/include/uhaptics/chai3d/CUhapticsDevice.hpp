@@ -3,26 +3,31 @@
 //
 // CHAI3D hands the device a Cartesian force/torque in the device frame (x toward the operator, y to
 // the right, z up; N, N m) from whatever thread runs the application's haptic loop, at whatever
-// rate that loop spins. This class turns that into fixed-period servo ticks of the device's own
-// renderer (the subclass), holds the last command between ticks as hardware does, drives the
-// simulated backend with a scripted hand, and keeps session statistics (optionally written to a
-// file every half second and on close, so even a killed process leaves a recent record).
+// rate that loop spins. This class turns that into fixed-period servo ticks, each the same cycle on
+// every backend over one joint I/O (uhaptics::JointIo):
+//
+//   read the joints -> sense() (kinematics, CHAI3D state) -> render() (efforts) -> command -> advance
+//
+// It holds the last command between ticks as hardware does, drives the simulated backend's user
+// (the scripted hand), and keeps session statistics (optionally written to a file every half second
+// and on close, so even a killed process leaves a recent record).
 //
 // Time: in real-time mode (default) the number of servo ticks follows the wall clock, whatever the
 // application's loop rate (at most kMaxCatchUpTicks per call: a stalled loop does not trigger a burst
 // of simulation). In lock-step mode every setForceAndTorqueAndGripperForce() call is exactly one
 // servo tick: deterministic, for tests.
 //
-// Backends: "sim" (default) steps the device's simulation inside each servo tick, with the scripted
-// hand as its user. "emulated" and "usb" open the device's board (uhaptics::makeJointIo) before
-// startBackend(): the board's real-time servo loop (its own thread, the board's rate, wire
-// protocol, watchdogs, safety stage) carries each tick's joint reading in and efforts out, and the
-// emulated board simulates the device with its own user. The servo tick itself still runs when the
-// application calls, at the device's period.
+// Backends: "sim" (default) is the device's simulated plant (makeSimulatedPlant()) stepped by each
+// tick, with the scripted hand as its user; the joints are read again right after the step, so the
+// application sees the state the tick produced. "emulated" and "usb" are the device's board (the
+// board's real-time servo loop in its own thread, its rate, wire protocol, watchdogs and safety
+// stage); each tick reads the newest sample. A tick without a reading (link down, host watchdog)
+// commands zero and reports kDeviceError.
 //
 // Subclasses implement only what differs between devices: their specification (in the
-// constructor), their backend and their rendering method (the three protected hooks, which keep
-// m_state current). All hooks run with the device mutex held.
+// constructor), their simulated plant, how a joint reading becomes kinematics and CHAI3D state
+// (sense) and how to render (render). All hooks run with the device mutex held.
+#include <array>
 #include <atomic>
 #include <chrono>
 #include <condition_variable>
@@ -34,8 +39,9 @@
 #include "system/CGlobals.h"  // must precede device headers (CHAI3D's feature switches)
 #include "devices/CGenericHapticDevice.h"
 
-#include "uhaptics/chai3d/device_selection.hpp"
+#include "uhaptics/backends/board_plant.hpp"
 #include "uhaptics/backends/joint_io.hpp"
+#include "uhaptics/chai3d/device_selection.hpp"
 #include "uhaptics/backends/scripted_hand.hpp"
 #include "uhaptics/chai3d/session_stats.hpp"
 #include "uhaptics/core/fault.hpp"
@@ -97,28 +103,58 @@ class cUhapticsDevice : public cGenericHapticDevice {
   virtual std::string getRendererName() const = 0;
 
  protected:
-  /// a_servoPeriod [s]: the device's control period (its board's rate).
+  /// a_servoPeriod [s]: the device's control period (its board's rate). a_joints, a_actuators: what
+  /// its joint I/O carries (checked against the board in open()), at most C_MAX_DOF joints.
   cUhapticsDevice(unsigned int a_deviceNumber, const uhaptics::DeviceSelection& a_selection,
-                  double a_servoPeriod);
+                  double a_servoPeriod, int a_joints, int a_actuators);
 
-  /// Sets up and starts the backend and sets m_state; throws uhaptics::Error with a message when it
-  /// cannot.
-  virtual void startBackend() = 0;
-  /// Leaves the device with a zero command and releases the backend. Must not throw.
-  virtual void stopBackend() noexcept = 0;
   /// What one servo period gets: the application's force [N] and torque [N m] in the device frame
-  /// (zero while forces are disabled) and the scripted hand's force (zero when there is none).
+  /// (zero while forces are disabled).
   struct ServoInput {
-    uhaptics::Vec3 force, torque, handForce;
+    uhaptics::Vec3 force, torque;
+    /// The position the application last read (device frame), the one its force was computed from.
+    uhaptics::Vec3 seenPosition;
     double dt;    // the servo period [s]
     double time;  // servo ticks so far x dt [s]
   };
-  /// One servo period: render the application's force/torque through the device's method, apply
-  /// the hand's force, advance dt and update m_state. Returns the fault (zero command sent) and
-  /// the largest actuator command magnitude in a_outputMagnitude.
-  virtual uhaptics::Fault servoTick(const ServoInput& a_input, double& a_outputMagnitude) noexcept = 0;
+
+  // ---- what a device class supplies ---------------------------------------------------------
+  /// The "sim" backend's device, made in open(): the device's simulation with the scripted hand as
+  /// its user (BoardPlant::setUserForce) or, for a position-driven device, a user of its own.
+  virtual std::unique_ptr<uhaptics::BoardPlant> makeSimulatedPlant() = 0;
+  /// In open(), before the first reading: renderers and filters to their initial state.
+  virtual void resetRendering() = 0;
+  /// One joint reading (a_joints values each).
+  struct JointReading {
+    const double* positions;  // as the sensors give them: what the renderer works from
+    const double* rates;      // exact from a simulation, else the positions' differences over the
+                              // device's sample clock (zero on the session's first reading)
+    const double* actual;     // a simulation's positions without sensor error, else `positions`
+    bool first;               // the session's first reading
+  };
+  /// Update what render() needs and m_state from a reading. The CHAI3D state may use `actual`: a
+  /// simulated device then shows the scene where it is, as the sim backends always have.
+  virtual void sense(const JointReading& a_reading) noexcept = 0;
+  /// In open(), after the first sense(): throws uhaptics::Error when the device cannot start from
+  /// that reading.
+  virtual void checkFirstReading() {}
+  /// One servo period from the last sense(): the actuator efforts for the application's force and
+  /// torque. A returned fault (or a non-finite effort) sends zero instead.
+  virtual uhaptics::Fault render(const ServoInput& a_input, double* a_efforts) noexcept = 0;
+  /// A period without a reading (link down, host watchdog): zero went out; end what assumes a
+  /// continuous contact.
+  virtual void readingLost() noexcept {}
+  /// close(): the last command was zero; end the session's rendering state. Must not throw.
+  virtual void endSession() noexcept {}
+  /// The scripted hand's force (device frame) in the device model's task frame, for the simulated
+  /// plant: unchanged by default; planar devices override it with planarForce().
+  virtual uhaptics::Vec3 deviceToModelForce(const uhaptics::Vec3& a_force) const noexcept { return a_force; }
+  /// The joint I/O of the selected backend: makeJointIo() of the registered device for emulated and
+  /// usb, the simulated plant for sim. Test fixtures that are not registered devices override it.
+  virtual std::unique_ptr<uhaptics::JointIo> makeJointIo();
+
   /// What the device senses, in CHAI3D's device frame with the origin at the workspace centre. The
-  /// subclass keeps it current: startBackend() sets the initial state, servoTick() the new one.
+  /// subclass keeps it current in sense() (and sets a resting state in its constructor).
   struct State {
     uhaptics::Vec3 position = uhaptics::Vec3::Zero();
     uhaptics::Mat3 rotation = uhaptics::Mat3::Identity();
@@ -140,19 +176,13 @@ class cUhapticsDevice : public cGenericHapticDevice {
   static uhaptics::Vec2 deviceToPlanar(const uhaptics::Vec3& a_device) noexcept {
     return uhaptics::Vec2(a_device.y(), -a_device.z());
   }
-  /// Board backends (emulated, usb): whether one is open, and its joint I/O. readBoard() gives the
-  /// newest joint reading and its device-clock time; while there is none (link down, host watchdog
-  /// holding zero) it commands zero and returns false. commandBoard() hands the efforts to
-  /// the board's servo loop, which checks them before they leave the host.
-  bool hasBoard() const noexcept { return m_board != nullptr; }
-  bool readBoard(double* a_positions, std::uint32_t& a_sampleTimeUs) noexcept;
-  void commandBoard(const double* a_efforts) noexcept;
-  /// In startBackend(): throws uhaptics::Error unless the board has these joint and actuator counts,
-  /// then waits (at most a_timeoutSeconds) for its first joint reading, written to a_positions.
-  void startBoard(int a_joints, int a_actuators, double* a_positions, double a_timeoutSeconds = 2.0);
+  /// A device-frame force in a planar model's task frame (x, y, 0).
+  static uhaptics::Vec3 planarForce(const uhaptics::Vec3& a_device) noexcept {
+    return uhaptics::Vec3(a_device.y(), -a_device.z(), 0.0);
+  }
   /// Folder of the device parameter files: uhaptics::defaultParamsDirectory() (params_location.hpp).
   static std::string paramsDirectory();
-  /// The session statistics, for subclasses to declare (constructor) and record (servoTick) the
+  /// The session statistics, for subclasses to declare (constructor) and record (render) the
   /// figures that show their rendering method at work.
   uhaptics::SessionStats& sessionStats() noexcept { return m_stats; }
   /// Held during every hook; subclass accessors that read device state take it too.
@@ -165,6 +195,9 @@ class cUhapticsDevice : public cGenericHapticDevice {
   using Clock = std::chrono::steady_clock;
   void advanceLocked(bool a_oneTick) noexcept;
   void tickLocked() noexcept;
+  /// Reads the joints and passes them to sense(); false (nothing sensed) when there is no reading.
+  bool readJointsLocked(bool a_first) noexcept;
+  void commandZeroLocked() noexcept;
   double wallTime() const noexcept;
   void startStatsWriter();
   void stopStatsWriter() noexcept;
@@ -176,7 +209,11 @@ class cUhapticsDevice : public cGenericHapticDevice {
   bool m_forcesEnabled = true;
   bool m_handEnabled;
   std::unique_ptr<uhaptics::ScriptedHand> m_hand;
-  std::unique_ptr<uhaptics::JointIo> m_board;  // emulated, usb; opened in open(), closed in close()
+  const int m_joints, m_actuators;
+  std::unique_ptr<uhaptics::JointIo> m_io;  // every backend; opened in open(), closed in close()
+  std::array<double, uhaptics::wire::kMaxChannels> m_positions{}, m_rates{}, m_actual{}, m_efforts{};
+  uhaptics::JointRateEstimator m_rateEstimator;  // rates for backends that do not know them
+  bool m_sensedAfterAdvance = false;  // sim: the joints were read right after the last step
   uhaptics::Vec3 m_commandForce = uhaptics::Vec3::Zero();
   uhaptics::Vec3 m_commandTorque = uhaptics::Vec3::Zero();
   std::uint64_t m_ticks = 0;

@@ -1,7 +1,8 @@
 #pragma once
 // The finger exoskeleton's simulation as its board drives it: joints (l_x [m], q_B [rad]), actuator
-// force on l_x [N] (ExoFingerSim). Its user: the finger follows a synthesized flexion-extension
-// trajectory (position-driven, as in paper 000's Fig. 4).
+// force on l_x [N] (ExoFingerSim). Its user: the finger follows a trajectory (position-driven, as in
+// paper 000's Fig. 4): by default a synthesized flexion-extension, or one the caller gives (a CHAI3D
+// session's hand path). A user force has nothing to move.
 #include <memory>
 
 #include "uhaptics/backends/device_plants.hpp"
@@ -20,12 +21,16 @@ class ExoFingerBoardPlant final : public BoardPlant {
   };
   /// Throws Error on invalid options (see ExoFingerSim, FingerTrajectory).
   ExoFingerBoardPlant(ExoFingerModel model, const Options& options);
+  /// The finger follows `trajectory` (made for this model), stepped at sim.update_rate_hz.
+  ExoFingerBoardPlant(std::unique_ptr<const ExoFingerModel> model, FingerTrajectory trajectory,
+                      const ExoFingerSimOptions& sim);
 
   int jointCount() const noexcept override { return ExoFingerModel::kJoints; }
   int actuatorCount() const noexcept override { return ExoFingerModel::kActuated; }
   void readJoints(double* positions) noexcept override;
   void applyCommand(const double* efforts) noexcept override;
   void advance(double dt) noexcept override;
+  Fault lastFault() const noexcept override { return sim_.state().fault; }
 
   const ExoFingerModel& model() const noexcept { return *model_; }
   const ExoFingerSim& sim() const noexcept { return sim_; }

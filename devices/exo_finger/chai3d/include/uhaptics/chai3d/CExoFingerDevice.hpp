@@ -31,7 +31,7 @@
 // joint readings; the emulated board's finger follows paper 000's flexion-extension by itself.
 #include <memory>
 
-#include "uhaptics/backends/exo_finger_sim.hpp"
+#include "uhaptics/backends/exo_finger_plant.hpp"
 #include "uhaptics/chai3d/CUhapticsDevice.hpp"
 #include "uhaptics/models/exo_finger_model.hpp"
 #include "uhaptics/renderers/underactuated_renderers.hpp"
@@ -72,9 +72,11 @@ class cExoFingerDevice : public cUhapticsDevice {
   uhaptics::Vec3 handToDevice(const uhaptics::Vec2& a_handPoint) const noexcept;
 
  protected:
-  virtual void startBackend();
-  virtual void stopBackend() noexcept;
-  virtual uhaptics::Fault servoTick(const ServoInput& a_input, double& a_outputMagnitude) noexcept;
+  virtual std::unique_ptr<uhaptics::BoardPlant> makeSimulatedPlant();
+  virtual void resetRendering();
+  virtual void sense(const JointReading& a_reading) noexcept;
+  virtual uhaptics::Fault render(const ServoInput& a_input, double* a_efforts) noexcept;
+  virtual void endSession() noexcept;
 
  private:
   using Model = uhaptics::ExoFingerModel;
@@ -83,8 +85,8 @@ class cExoFingerDevice : public cUhapticsDevice {
   /// m_state from m_data (finger assembled at the latest joint reading).
   void updateState(double a_dt) noexcept;
 
-  std::unique_ptr<const Model> m_model;  // the sim and the renderer keep references to it
-  std::unique_ptr<uhaptics::ExoFingerSim> m_sim;
+  std::unique_ptr<const Model> m_model;  // the renderer keeps a reference to it
+  const uhaptics::ExoFingerBoardPlant* m_plant = nullptr;  // sim backend: the simulated finger (getFingerTorque)
   std::unique_ptr<Renderer> m_renderer;
   uhaptics::ExoFingerData m_data;
   double m_couplingStiffness;                       // Z_x (scalar), N m/rad

@@ -23,12 +23,12 @@
 //                              saturates (0: the force was never scaled)
 //   max_null_space_torque_Nm   maximum Euclidean norm of the applied null-space torque [N m]
 //
-// Simulated backend: SimulatedPlanarLinkage (lumped dynamics, friction, torque saturation) with the
-// scripted hand's force applied at the end effector. Board backends (emulated, usb): the controller
-// on the board's joint readings, joint rates from their differences over the board's sample clock.
+// Simulated backend: PlanarLinkagePlant<4> (lumped dynamics, friction, torque saturation) with no
+// grip of its own: the scripted hand's force acts at the end effector. On every backend the
+// controller runs on the joint readings (rates exact from the simulation, else their differences
+// over the board's sample clock).
 #include <memory>
 
-#include "uhaptics/backends/simulated_planar_linkage.hpp"
 #include "uhaptics/chai3d/CUhapticsDevice.hpp"
 #include "uhaptics/models/planar_linkage_model.hpp"
 #include "uhaptics/renderers/fme_null_space_controller.hpp"
@@ -97,22 +97,22 @@ class cRedundantPlanarDevice : public cUhapticsDevice {
   const Model& getModel() const { return *m_model; }
 
  protected:
-  virtual void startBackend();
-  virtual void stopBackend() noexcept;
-  virtual uhaptics::Fault servoTick(const ServoInput& a_input, double& a_outputMagnitude) noexcept;
+  virtual std::unique_ptr<uhaptics::BoardPlant> makeSimulatedPlant();
+  virtual void resetRendering();
+  virtual void sense(const JointReading& a_reading) noexcept;
+  virtual uhaptics::Fault render(const ServoInput& a_input, double* a_efforts) noexcept;
+  virtual uhaptics::Vec3 deviceToModelForce(const uhaptics::Vec3& a_force) const noexcept { return planarForce(a_force); }
 
  private:
-  void updateState() noexcept;  // m_state from the simulated device or the board's reading
+  void updateState() noexcept;  // m_state from m_q, m_qd
   void recordFigures(const Controller::Status& a_status) noexcept;  // the renderer figures of one tick
 
   std::unique_ptr<const Model> m_model;  // the controller keeps a reference
-  std::unique_ptr<uhaptics::SimulatedPlanarLinkage<4>> m_sim;
   std::unique_ptr<Controller> m_controller;
   uhaptics::Vec2 m_centre = uhaptics::Vec2::Zero();  // end effector at home, task frame
   Model::JointVector m_tau = Model::JointVector::Zero();
   Model::JointVector m_q = Model::JointVector::Zero();   // the latest joint reading
   Model::JointVector m_qd = Model::JointVector::Zero();  // its rates
-  uhaptics::JointRateEstimator m_rate;                    // board backends
   // Renderer figures (session statistics): ids, and whether the last tick headed for the stiff ellipsoid.
   int m_figureFreeToStiff = -1, m_figureStiffToFree = -1, m_figureStiffTicks = -1;
   int m_figureForceScaleReduction = -1, m_figureNullSpaceTorque = -1;

@@ -1,7 +1,8 @@
 #pragma once
 // The TAU's simulation as its board drives it: 6 joint angles [rad], 6 joint torques [N m]
-// (SimulatedTau). Its user: a hand modelled as a spring-damper holding the tool at the home pose
-// (paper 001's k_h, b_h).
+// (SimulatedTau). Its user, by default: a hand modelled as a spring-damper holding the tool at the
+// home pose (paper 001's k_h, b_h); without it, whoever calls setUserForce (a CHAI3D session's
+// scripted hand).
 #include <memory>
 
 #include "uhaptics/backends/device_plants.hpp"
@@ -14,6 +15,8 @@ class TauBoardPlant final : public HeldTorquePlant<6> {
  public:
   struct Options {
     HandModel hand;                   // spring-damper holding the tool at the home pose
+    bool hold_tool = true;            // false: no hand of its own; setUserForce is the user
+    double tool_damping = 0.0;        // mechanical damping at the tool [N s/m]
     bool quantize = true;             // 4096-count encoders
     // The simulated handle's rotational damping [N m s/rad], as cTauDevice's default: the hand holds
     // only the tool's position, and the host's command arrives 1-2 sample periods after the reading
@@ -23,6 +26,18 @@ class TauBoardPlant final : public HeldTorquePlant<6> {
   };
   TauBoardPlant(TauModel model, const Options& options);
   void advance(double dt) noexcept override;
+  bool readJointRates(double* rates) noexcept override {
+    Eigen::Map<Vec6> out(rates);
+    out = sim_.qd();
+    return true;
+  }
+  bool readActualJoints(double* positions) noexcept override {
+    Eigen::Map<Vec6> out(positions);
+    out = sim_.q();
+    return true;
+  }
+  void setUserForce(const Vec3& force) noexcept override { user_force_ = force; }
+  Fault lastFault() const noexcept override { return fault_; }
 
   const TauModel& model() const noexcept { return *model_; }
   const SimulatedTau& sim() const noexcept { return sim_; }
@@ -34,6 +49,8 @@ class TauBoardPlant final : public HeldTorquePlant<6> {
   std::unique_ptr<const TauModel> model_;
   SimulatedTau sim_;
   FixedStepClock clock_;
+  Vec3 user_force_ = Vec3::Zero();
+  Fault fault_ = Fault::kNone;
   long faults_ = 0;
 };
 

@@ -34,12 +34,13 @@
 //   least half contact_force rendered by the spring), soft_surface_contacts (contacts a probe found
 //   below stiff_threshold), soft_stiffness_max_N_per_m (maximum of their stiffness), lqr_overloads
 //   (contacts the wall, saturated for 20 ms, handed to the spring).
-// Simulated backend: SimulatedTau (lumped dynamics, quantized encoders, torque saturation) with the
-// scripted hand's force applied at the tool. Board backends (emulated, usb): the same renderers on
-// the board's joint readings; velocities from their differences over the board's sample clock.
+// Simulated backend: TauBoardPlant (SimulatedTau: lumped dynamics, quantized encoders, torque
+// saturation) without a hand of its own: the scripted hand's force acts at the tool. The renderers
+// work from the encoder readings on every backend; on sim the scene is shown the tool's pose without
+// encoder error (see sense()). Board backends: velocities from the readings' differences over the
+// board's sample clock.
 #include <memory>
 
-#include "uhaptics/backends/simulated_tau.hpp"
 #include "uhaptics/chai3d/CUhapticsDevice.hpp"
 #include "uhaptics/models/tau_model.hpp"
 #include "uhaptics/renderers/lqr_wall_renderer.hpp"
@@ -88,18 +89,23 @@ class cTauDevice : public cUhapticsDevice {
   void clearContactSurface();
 
  protected:
-  virtual void startBackend();
-  virtual void stopBackend() noexcept;
-  virtual uhaptics::Fault servoTick(const ServoInput& a_input, double& a_outputMagnitude) noexcept;
+  virtual std::unique_ptr<uhaptics::BoardPlant> makeSimulatedPlant();
+  virtual void resetRendering();
+  virtual void sense(const JointReading& a_reading) noexcept;
+  virtual void checkFirstReading();
+  virtual uhaptics::Fault render(const ServoInput& a_input, double* a_efforts) noexcept;
+  virtual void readingLost() noexcept;
+  virtual void endSession() noexcept;
 
  private:
   void recordFigures(const uhaptics::TauContactClassifier::Events& a_events, const uhaptics::Vec3& a_force) noexcept;
-  void updateState() noexcept;  // m_state from the simulated device or the board's reading
+  /// m_state from an assembled pose (a_data: pose, Jacobian) at joints a_q, rates m_qd.
+  void updateState(const uhaptics::TauData& a_data, const uhaptics::Vec6& a_q) noexcept;
 
-  std::unique_ptr<const uhaptics::TauModel> m_model;  // sim and renderers keep references
-  std::unique_ptr<uhaptics::SimulatedTau> m_sim;
+  std::unique_ptr<const uhaptics::TauModel> m_model;  // the renderers keep references
   std::unique_ptr<uhaptics::LqrWallRenderer> m_lqr;
-  std::unique_ptr<uhaptics::TauData> m_data;
+  std::unique_ptr<uhaptics::TauData> m_data;        // the encoders' pose: what the wall works from
+  std::unique_ptr<uhaptics::TauData> m_actualData;  // sim: the pose without encoder error (m_state)
   uhaptics::Vec3 m_centre = uhaptics::Vec3::Zero();
   std::atomic<int> m_wallMode{C_TAU_WALL_AUTO};
   double m_toolDamping;
@@ -110,8 +116,8 @@ class cTauDevice : public cUhapticsDevice {
       m_figSpringTicks, m_figSoftContacts, m_figSoftStiffness, m_figOverloads;
   uhaptics::Vec6 m_tau = uhaptics::Vec6::Zero();
   uhaptics::Vec6 m_q = uhaptics::Vec6::Zero();   // the latest joint reading
-  uhaptics::Vec6 m_qd = uhaptics::Vec6::Zero();  // its rates (board backends)
-  uhaptics::JointRateEstimator m_rate;
+  uhaptics::Vec6 m_qd = uhaptics::Vec6::Zero();  // its rates
+  uhaptics::Fault m_senseFault = uhaptics::Fault::kNone;  // forward kinematics of the latest reading
   bool m_explicitSurface = false;       // setContactSurface() in force
   uhaptics::SurfaceContact m_explicit;  // its surface, model frame
 };

@@ -1,0 +1,59 @@
+#pragma once
+// A planar linkage's simulation as its board drives it: N joint angles [rad], N joint torques [N m]
+// (SimulatedPlanarLinkage<N>), for every planar device (paper 003's RHI and its 3-DoF example arm).
+// Its user, by default: a grip holding the end effector where it starts (the paper's palpation
+// set-up). With a zero grip, the user is whoever calls setUserForce (a CHAI3D session's scripted
+// hand).
+#include "uhaptics/backends/device_plants.hpp"
+#include "uhaptics/backends/simulated_planar_linkage.hpp"
+#include "uhaptics/core/fault.hpp"
+#include "uhaptics/models/planar_linkage_model.hpp"
+
+namespace uhaptics {
+
+template <int N>
+class PlanarLinkagePlant final : public HeldTorquePlant<N> {
+ public:
+  using Model = PlanarLinkageModel<N>;
+  struct Options {
+    double substep = 1e-4;            // integration step [s]
+    double hand_stiffness = 800.0;    // grip holding the end effector at its start [N/m]
+    double hand_damping = 8.0;        // [N s/m]
+  };
+  /// Starts at rest at the model's home configuration. Throws Error on invalid options.
+  PlanarLinkagePlant(Model model, const Options& options)
+      : sim_(std::move(model), options.substep), clock_(options.substep) {
+    if (!(options.hand_stiffness >= 0.0) || !(options.hand_damping >= 0.0))
+      throw Error("PlanarLinkagePlant: hand stiffness and damping must be >= 0");
+    load_.anchor = sim_.endEffectorPosition();
+    load_.stiffness = options.hand_stiffness * Mat2::Identity();
+    load_.damping = options.hand_damping * Mat2::Identity();
+    sim_.setLoad(load_);
+  }
+
+  void advance(double dt) noexcept override {
+    const long n = clock_.take(dt);
+    if (n > 0) fault_ = sim_.step(this->command_, static_cast<double>(n) * clock_.period());
+  }
+  bool readJointRates(double* rates) noexcept override {
+    Eigen::Map<Vec<N>> out(rates);
+    out = sim_.velocity();
+    return true;
+  }
+  void setUserForce(const Vec3& force) noexcept override {
+    load_.bias = force.template head<2>();
+    sim_.setLoad(load_);
+  }
+  Fault lastFault() const noexcept override { return fault_; }
+
+  const SimulatedPlanarLinkage<N>& sim() const noexcept { return sim_; }
+
+ private:
+  const Vec<N>& sensed() const noexcept override { return sim_.position(); }
+  SimulatedPlanarLinkage<N> sim_;
+  FixedStepClock clock_;
+  EndEffectorLoad load_;
+  Fault fault_ = Fault::kNone;
+};
+
+}  // namespace uhaptics
