@@ -1,4 +1,4 @@
-#include "uhaptics/chai3d/CRedundantPlanarDevice.hpp"
+#include "uhaptics/chai3d/CPlanarLinkageDevice.hpp"
 
 #include <Eigen/Eigenvalues>
 #include <cmath>
@@ -8,10 +8,12 @@
 namespace chai3d {
 namespace {
 
-// The controller's options from the selection ("options/rhi/<name>" in the config file, or set in
-// code); the controller's defaults are paper 003's. Ranges here only catch typos; the controller
+// The controller's options from the selection ("options/<device>/<name>" in the config file, or set
+// in code); the controller's defaults are paper 003's. Ranges here only catch typos; the controller
 // checks consistency (eps1 <= eps2) and the device constructor reports it.
+template <int N>
 uhaptics::FmeControllerOptions<2> optionsFrom(const uhaptics::DeviceSelection& s) {
+  using Device = cPlanarLinkageDevice<N>;
   uhaptics::FmeControllerOptions<2> o;
   const double mode = s.option("mode", 0.0, 0.0, 2.0);
   o.mode = mode == 1.0 ? uhaptics::FmeEllipsoidMode::kFree
@@ -23,27 +25,29 @@ uhaptics::FmeControllerOptions<2> optionsFrom(const uhaptics::DeviceSelection& s
   o.transition.enter_stiff_below = s.option("eps1", o.transition.enter_stiff_below, 0.0, 1.0);
   o.transition.leave_stiff_at = s.option("eps2", o.transition.leave_stiff_at, 0.0, 1.0);
   o.transition.rho = s.option("rho", o.transition.rho, 0.0, 10.0);
-  // Joint-limit barrier and approach-speed damper (assumed limits, see devices/params/rhi4.json): 0 turns each off.
+  // Joint-limit barrier and approach-speed damper (the limits of the device's parameter file): 0 turns each off.
   o.limit_gain = s.option("limit_gain", o.limit_gain, 0.0, 100.0);
   o.limit_margin = s.option("limit_margin", o.limit_margin, 1e-3, 1.0);
   o.limit_speed = s.option("limit_speed", o.limit_speed, 0.0, 100.0);
   // The null-space torque envelope (the paper's controller has none; see the class comment).
-  o.max_null_space_torque = s.option("max_null_space_torque", cRedundantPlanarDevice::kDefaultMaxNullSpaceTorque, 0.01, 10.0);
-  o.null_space_ramp_time = s.option("null_space_ramp_time", cRedundantPlanarDevice::kDefaultNullSpaceRampTime, 0.0, 10.0);
-  o.stiff_direction_time = s.option("stiff_direction_time", cRedundantPlanarDevice::kDefaultStiffDirectionTime, 0.0, 1.0);
+  o.max_null_space_torque = s.option("max_null_space_torque", Device::kDefaultMaxNullSpaceTorque, 0.01, 10.0);
+  o.null_space_ramp_time = s.option("null_space_ramp_time", Device::kDefaultNullSpaceRampTime, 0.0, 10.0);
+  o.stiff_direction_time = s.option("stiff_direction_time", Device::kDefaultStiffDirectionTime, 0.0, 1.0);
   return o;
 }
 
 }  // namespace
 
-cRedundantPlanarDevice::cRedundantPlanarDevice(unsigned int a_deviceNumber, const uhaptics::DeviceSelection& a_selection)
+template <int N>
+cPlanarLinkageDevice<N>::cPlanarLinkageDevice(unsigned int a_deviceNumber, const uhaptics::DeviceSelection& a_selection,
+                                              Model a_model, const std::string& a_title, double a_workspaceRadius)
     : cUhapticsDevice(a_deviceNumber, a_selection, 1e-3, Model::kJoints, Model::kJoints),
-      m_model(std::make_unique<Model>(Model::fromFile(paramsDirectory() + "/rhi4.json", "rhi4"))) {
+      m_model(std::make_unique<const Model>(std::move(a_model))) {
   const Model& model = *m_model;
   try {
-    m_controller = std::make_unique<Controller>(model, model.torqueLimits(), model.home(), optionsFrom(a_selection));
+    m_controller = std::make_unique<Controller>(model, model.torqueLimits(), model.home(), optionsFrom<N>(a_selection));
   } catch (const uhaptics::Error& e) {
-    throw uhaptics::Error(std::string("device rhi (options/rhi/...): ") + e.what());
+    throw uhaptics::Error("device " + a_selection.device + " (options/" + a_selection.device + "/...): " + e.what());
   }
   model.forward(model.home(), m_centre);
   using Kind = uhaptics::RendererFigure::Kind;
@@ -56,54 +60,61 @@ cRedundantPlanarDevice::cRedundantPlanarDevice(unsigned int a_deviceNumber, cons
   // The force the device can produce in every direction at home: torques tau = J^T F within the
   // ellipse sum (tau_i / T_i)^2 <= 1 allow |F| = 1 / sqrt(u^T J W^2 J^T u) along u; the minimum
   // over u (inside the actual box of limits, so conservative).
-  Model::Jacobian J;
+  typename Model::Jacobian J;
   model.jacobian(model.home(), J);
-  const Model::JointVector w = model.torqueLimits().cwiseInverse();
+  const typename Model::JointVector w = model.torqueLimits().cwiseInverse();
   const uhaptics::Mat2 JWWJt = J * w.cwiseAbs2().asDiagonal() * J.transpose();
   const double lambda_max = Eigen::SelfAdjointEigenSolver<uhaptics::Mat2>(JWWJt, Eigen::EigenvaluesOnly).eigenvalues()(1);
 
-  setCommonSpecifications("4-DoF planar redundant interface", false);
+  setCommonSpecifications(a_title, false);
   m_specifications.m_maxLinearForce = 1.0 / std::sqrt(lambda_max);
   m_specifications.m_maxLinearStiffness = 1000.0;  // paper 003's stiff environment K_e
   m_specifications.m_maxLinearDamping = 5.0;       // assumed: well inside 1 kHz stability for these masses
-  // Assumed: a 10 cm disc around home keeps the arm far from the 0.786 m reach boundary.
-  m_specifications.m_workspaceRadius = a_selection.option("workspace_radius", 0.1, 0.01, 0.3);
+  m_specifications.m_workspaceRadius = a_selection.option("workspace_radius", a_workspaceRadius, 0.01, 0.3);
   m_q = model.home();
   updateState();
 }
 
-cRedundantPlanarDevice::~cRedundantPlanarDevice() { close(); }
+template <int N>
+cPlanarLinkageDevice<N>::~cPlanarLinkageDevice() {
+  close();
+}
 
-std::unique_ptr<uhaptics::BoardPlant> cRedundantPlanarDevice::makeSimulatedPlant() {
-  using Plant = uhaptics::PlanarLinkagePlant<Model::kJoints>;
-  Plant::Options options;
+template <int N>
+std::unique_ptr<uhaptics::BoardPlant> cPlanarLinkageDevice<N>::makeSimulatedPlant() {
+  using Plant = uhaptics::PlanarLinkagePlant<N>;
+  typename Plant::Options options;
   options.hand_stiffness = 0.0;  // no grip: the scripted hand is the user
   options.hand_damping = 0.0;
   return std::make_unique<Plant>(*m_model, options);
 }
 
-void cRedundantPlanarDevice::resetRendering() {
+template <int N>
+void cPlanarLinkageDevice<N>::resetRendering() {
   m_controller->reset();  // free-motion ellipsoid; the null-space torque ramps up from zero
   m_stiffTarget = m_controller->status().omega_target == 0.0;
   m_tau.setZero();
 }
 
-void cRedundantPlanarDevice::sense(const JointReading& a_reading) noexcept {
-  m_q = Eigen::Map<const Model::JointVector>(a_reading.positions);
-  m_qd = Eigen::Map<const Model::JointVector>(a_reading.rates);
+template <int N>
+void cPlanarLinkageDevice<N>::sense(const JointReading& a_reading) noexcept {
+  m_q = Eigen::Map<const typename Model::JointVector>(a_reading.positions);
+  m_qd = Eigen::Map<const typename Model::JointVector>(a_reading.rates);
   updateState();
 }
 
-uhaptics::Fault cRedundantPlanarDevice::render(const ServoInput& a_input, double* a_efforts) noexcept {
+template <int N>
+uhaptics::Fault cPlanarLinkageDevice<N>::render(const ServoInput& a_input, double* a_efforts) noexcept {
   // A planar device: only the in-plane force is rendered (no torque, x not actuated).
   const uhaptics::Fault fault = m_controller->tick(a_input.time, m_q, m_qd, deviceToPlanar(a_input.force), m_tau);
   recordFigures(m_controller->status());
-  Eigen::Map<Model::JointVector> out(a_efforts);
+  Eigen::Map<typename Model::JointVector> out(a_efforts);
   out = m_tau;
   return fault;
 }
 
-void cRedundantPlanarDevice::recordFigures(const Controller::Status& a_status) noexcept {
+template <int N>
+void cPlanarLinkageDevice<N>::recordFigures(const typename Controller::Status& a_status) noexcept {
   uhaptics::SessionStats& stats = sessionStats();
   // A switch is where the desired ellipsoid starts moving towards the other one (the observer's
   // hysteresis decision, or a change of mode); a reversal mid-blend counts as a switch back.
@@ -116,10 +127,11 @@ void cRedundantPlanarDevice::recordFigures(const Controller::Status& a_status) n
   stats.observeMaximum(m_figureNullSpaceTorque, a_status.tau_null.norm());
 }
 
-void cRedundantPlanarDevice::updateState() noexcept {
+template <int N>
+void cPlanarLinkageDevice<N>::updateState() noexcept {
   // Kinematics of the latest joint reading.
   uhaptics::Vec2 x;
-  Model::Jacobian J;
+  typename Model::Jacobian J;
   m_model->forward(m_q, x);
   m_model->jacobian(m_q, J);
   m_state.position = planarToDevice(x - m_centre);
@@ -127,24 +139,31 @@ void cRedundantPlanarDevice::updateState() noexcept {
   m_state.joints = m_q;
 }
 
-bool cRedundantPlanarDevice::setNullSpaceOptions(const Controller::Options& a_options) {
+template <int N>
+bool cPlanarLinkageDevice<N>::setNullSpaceOptions(const typename Controller::Options& a_options) {
   std::lock_guard<std::mutex> lock(deviceMutex());
   return m_controller->setOptions(a_options) == uhaptics::Fault::kNone;
 }
 
-cRedundantPlanarDevice::Controller::Options cRedundantPlanarDevice::getNullSpaceOptions() {
+template <int N>
+typename cPlanarLinkageDevice<N>::Controller::Options cPlanarLinkageDevice<N>::getNullSpaceOptions() {
   std::lock_guard<std::mutex> lock(deviceMutex());
   return m_controller->options();
 }
 
-cRedundantPlanarDevice::Controller::Status cRedundantPlanarDevice::getNullSpaceStatus() {
+template <int N>
+typename cPlanarLinkageDevice<N>::Controller::Status cPlanarLinkageDevice<N>::getNullSpaceStatus() {
   std::lock_guard<std::mutex> lock(deviceMutex());
   return m_controller->status();
 }
 
-cRedundantPlanarDevice::Model::JointVector cRedundantPlanarDevice::getJointPositions() {
+template <int N>
+typename cPlanarLinkageDevice<N>::Model::JointVector cPlanarLinkageDevice<N>::getJointPositions() {
   std::lock_guard<std::mutex> lock(deviceMutex());
   return m_q;
 }
+
+template class cPlanarLinkageDevice<3>;
+template class cPlanarLinkageDevice<4>;
 
 }  // namespace chai3d
