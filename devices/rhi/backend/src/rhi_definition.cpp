@@ -2,14 +2,13 @@
 // self-motion steered by force-manipulability null-space control.
 #include <limits>
 
-#include "uhaptics/backends/board_catalog.hpp"
 #include "uhaptics/backends/planar_linkage_plant.hpp"
-#include "uhaptics/models/param_file.hpp"
 #include "uhaptics/models/planar_linkage_model.hpp"
 
 namespace uhaptics::devices::rhi {
 
 constexpr double kNotPublished = std::numeric_limits<double>::quiet_NaN();
+constexpr char kModel[] = "rhi4";  // the parameter file's "device"
 
 DeviceDefinition definition() {
   DeviceDefinition d;
@@ -18,14 +17,8 @@ DeviceDefinition definition() {
   d.wire_code = 3;
   d.published_link = {"003", kNotPublished, "no rate published", kNotPublished, "no rate published"};
   d.params_file = "rhi4.json";
-  d.describe_board = [](const DeviceDefinition& self, const ParamFile& file, BoardSpec& spec) {
-    const Rhi4Model model = Rhi4Model::fromFile(spec.params_path, "rhi4");
-    const Vec<4> limits = model.torqueLimits();
-    spec.descriptor = DeviceDescriptor::fromParams(file, wire::DeviceType{self.wire_code}, self.title, 4, 4, limits.data());
-  };
-  d.make_plant = [](const std::string& path) -> std::unique_ptr<BoardPlant> {
-    return std::make_unique<PlanarLinkagePlant<4>>(Rhi4Model::fromFile(path, "rhi4"), PlanarLinkagePlant<4>::Options{});
-  };
+  d.describe_board = &describePlanarLinkageBoard<4, kModel>;
+  d.make_plant = &makePlanarLinkagePlant<4, kModel>;
   return d;
 }
 

@@ -4,6 +4,10 @@
 // Its user, by default: a grip holding the end effector where it starts (the paper's palpation
 // set-up). With a zero grip, the user is whoever calls setUserForce (a CHAI3D session's scripted
 // hand).
+#include <memory>
+#include <string>
+
+#include "uhaptics/backends/device_definition.hpp"
 #include "uhaptics/backends/device_plants.hpp"
 #include "uhaptics/backends/simulated_planar_linkage.hpp"
 #include "uhaptics/core/fault.hpp"
@@ -55,5 +59,21 @@ class PlanarLinkagePlant final : public HeldTorquePlant<N> {
   EndEffectorLoad load_;
   Fault fault_ = Fault::kNone;
 };
+
+/// The definition parts every planar-linkage device shares, for the model whose parameter file names
+/// itself kModel (its "device" field):
+///   d.describe_board = &describePlanarLinkageBoard<4, kModel>;
+///   d.make_plant = &makePlanarLinkagePlant<4, kModel>;
+template <int N, const char* kModel>
+void describePlanarLinkageBoard(const DeviceDefinition& self, const ParamFile& file, BoardSpec& spec) {
+  const PlanarLinkageModel<N> model = PlanarLinkageModel<N>::fromFile(spec.params_path, kModel);
+  const Vec<N> limits = model.torqueLimits();
+  spec.descriptor = DeviceDescriptor::fromParams(file, wire::DeviceType{self.wire_code}, self.title, N, N, limits.data());
+}
+template <int N, const char* kModel>
+std::unique_ptr<BoardPlant> makePlanarLinkagePlant(const std::string& params_path) {
+  return std::make_unique<PlanarLinkagePlant<N>>(PlanarLinkageModel<N>::fromFile(params_path, kModel),
+                                                 typename PlanarLinkagePlant<N>::Options{});
+}
 
 }  // namespace uhaptics
