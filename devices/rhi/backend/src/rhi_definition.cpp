@@ -16,7 +16,9 @@ DeviceDefinition definition() {
   d.title = "RHI planar";
   d.summary = "4-DoF planar redundant interface, J^T F + FME null-space control (paper 003)";
   d.wire_code = 3;
-  d.published_link = {"003", kNotPublished, "no rate published", kNotPublished, "no rate published"};
+  d.paper = {"003", "Dynamic Reconfiguration of Redundant Haptic Interfaces for Rendering Soft and Hard Contacts",
+             "Torabi, Zareinia, Sutherland, Tavakoli"};
+  d.published_link = {kNotPublished, "no rate published", kNotPublished, "no rate published"};
   d.params_file = "rhi4.json";
   d.describe_board = [](const DeviceDefinition& self, const ParamFile& file, BoardSpec& spec) {
     const Rhi4Model model = Rhi4Model::fromFile(spec.params_path, "rhi4");
