@@ -6,8 +6,10 @@
 # name users select it by (UHAPTICS_DEVICE, --device). Every list of devices is derived from these
 # lines: the generated header uhaptics/device_list.hpp (UHAPTICS_FOR_EACH_DEVICE(X) calls
 # X(<folder>, "<name>") per device, used by the registries of the backends, the servo tool and the
-# CHAI3D layer) and the CMake list UHAPTICS_DEVICE_NAMES (the drop-in tests' devices). The folder's
-# own device.cmake, read after every layer's library exists, adds its sources to those libraries.
+# CHAI3D layer) and the CMake list UHAPTICS_DEVICE_NAMES (the drop-in tests' devices; with the global
+# properties UHAPTICS_DEVICE_FOLDERS / UHAPTICS_DEVICE_NAMES, set at once, examples/chai3d builds
+# each folder's examples/ scene). The folder's own device.cmake, read after every layer's library
+# exists, adds its sources to those libraries.
 set(UHAPTICS_GENERATED_INCLUDE_DIR "${PROJECT_BINARY_DIR}/generated/include")
 
 function(uhaptics_add_device folder)

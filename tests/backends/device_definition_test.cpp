@@ -26,6 +26,11 @@ TEST_CASE("every registered device has a unique name and wire code and a board a
     CHECK(d->wire_code >= 1);
     CHECK(d->wire_code <= wire::kMaxDeviceCode);
     CHECK_FALSE(d->summary.empty());
+    // The paper it reproduces: the report heads that paper's rows with this title.
+    CHECK_FALSE(d->paper.id.empty());
+    CHECK_FALSE(d->paper.title.empty());
+    REQUIRE(findDeviceByPaper(d->paper.id) != nullptr);
+    CHECK(findDeviceByPaper(d->paper.id)->paper.title == d->paper.title);  // one title per paper id
     CHECK(&findDevice(d->name) == d);
     CHECK(findDevice(wire::DeviceType{d->wire_code}) == d);
     // The board the host expects: the definition's code and title, counts and limits from the model.
@@ -48,4 +53,5 @@ TEST_CASE("an unknown device name is refused with the registered names", "[backe
   CHECK_THROWS_WITH(findDevice("phantom"), Catch::Contains("unknown device 'phantom'") && Catch::Contains("tau"));
   CHECK(findDevice(wire::DeviceType::kTestPlant) == nullptr);
   CHECK(findDevice(wire::DeviceType{wire::kMaxDeviceCode}) == nullptr);
+  CHECK(findDeviceByPaper("999") == nullptr);
 }

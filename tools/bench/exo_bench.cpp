@@ -115,7 +115,7 @@ void BM_ExoSubspaceSolveCold(benchmark::State& state) {
   state.counters["evaluations"] = evaluations / solves;
   state.counters["error"] = worst_error;
   state.counters["not_converged"] = failures / solves;
-  state.counters["allocs_per_tick"] = allocs / solves;
+  state.counters["allocs_per_solve"] = allocs / solves;
   const bool is_default =
       std::abs(opt.tolerance / SubspaceSolveOptions{}.tolerance - 1.0) < 1e-9 && state.range(1) == 0;
   state.counters["default"] = is_default ? 1.0 : 0.0;

@@ -2,7 +2,7 @@
 """Checks that includes point down the layers: every uhaptics header a source file includes belongs
 to the file's own layer or a lower one. Layers, bottom up: core, models, protocol, backends,
 renderers, chai3d, tools/examples. A file's layer comes from its folder (a device folder's layer
-sub-folders: model, backend, renderer, chai3d, servo); an included header's from its include path
+sub-folders: model, backend, renderer, chai3d, servo, examples); an included header's from its include path
 (uhaptics/<layer>/...). Usage: check_layers.py <source root>; exits 1 listing each violation."""
 import os
 import re
@@ -15,7 +15,8 @@ FOLDERS = {
     "devices/backends": "backends", "plugin/renderers": "renderers", "plugin/chai3d": "chai3d",
     "tools": "tools", "examples": "tools",
 }
-DEVICE_LAYERS = {"model": "models", "backend": "backends", "renderer": "renderers", "chai3d": "chai3d", "servo": "tools"}
+DEVICE_LAYERS = {"model": "models", "backend": "backends", "renderer": "renderers", "chai3d": "chai3d", "servo": "tools",
+                 "examples": "tools"}
 INCLUDE = re.compile(r'^\s*#\s*include\s+"uhaptics/([a-z0-9_]+)/')
 
 

@@ -152,25 +152,26 @@ DeviceRun runDevice(const std::string& device_name, const Settings& st, const st
   const ServoCounters k = loop.counters();
   const std::string where = st.usb ? "USB board" : "emulated board";
   const std::string who = device.name + ", " + where + ": ";
+  const std::string& paper_id = definition.paper.id;
   const PublishedLink& paper = definition.published_link;
   const double achieved_hz = timing.period.mean_us > 0.0 ? 1e6 / timing.period.mean_us : 0.0;
   const bool at_paper_rate = !std::isnan(paper.exchange_hz) && std::abs(cfg.rate_hz - paper.exchange_hz) < 1e-9;
   if (at_paper_rate) {
-    table.add({paper.paper, who + "host exchange rate, mean (paper: " + paper.exchange_text + ")", paper.exchange_hz,
+    table.add({paper_id, who + "host exchange rate, mean (paper: " + paper.exchange_text + ")", paper.exchange_hz,
                achieved_hz, "within 5 % of the paper's rate", std::abs(achieved_hz - paper.exchange_hz) <= 0.05 * paper.exchange_hz,
                "Hz"});
   } else {
-    table.addBound(paper.paper, who + "host exchange rate, mean (" + paper.exchange_text + "; set " +
+    table.addBound(paper_id, who + "host exchange rate, mean (" + paper.exchange_text + "; set " +
                                     std::to_string(static_cast<int>(cfg.rate_hz)) + " Hz)",
                    achieved_hz, "within 5 % of the set rate", std::abs(achieved_hz - cfg.rate_hz) <= 0.05 * cfg.rate_hz, "Hz");
   }
   const double sample_period_us = std::isnan(paper.sampling_hz) ? 1e6 / spec.sample_rate_hz : 1e6 / paper.sampling_hz;
-  table.addBound(paper.paper, who + "newest sample's age at the host, max (" + paper.sampling_text + ")",
+  table.addBound(paper_id, who + "newest sample's age at the host, max (" + paper.sampling_text + ")",
                  static_cast<double>(measuring.maxSampleAgeUs()),
                  "< " + std::to_string(static_cast<int>(sample_period_us)) + " us (one sampling period)",
                  measuring.maxSampleAgeUs() < sample_period_us, "us");
-  table.addBound(paper.paper, who + "frames lost", static_cast<double>(k.frames_lost), "= 0", k.frames_lost == 0, "frames");
-  table.addBound(paper.paper, who + "frames rejected", static_cast<double>(k.frames_rejected), "= 0",
+  table.addBound(paper_id, who + "frames lost", static_cast<double>(k.frames_lost), "= 0", k.frames_lost == 0, "frames");
+  table.addBound(paper_id, who + "frames rejected", static_cast<double>(k.frames_rejected), "= 0",
                  k.frames_rejected == 0, "frames");
   // Wake-up latency and watchdog trips have no published figure and no criterion: they stay in
   // summary.txt and the printout, not in the reproduction table (no pass mark without a criterion).

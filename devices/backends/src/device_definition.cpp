@@ -24,9 +24,10 @@ std::vector<DeviceDefinition> registered() {
   for (std::size_t i = 0; i < all.size(); ++i) {
     const DeviceDefinition& d = all[i];
     if (d.wire_code == 0 || d.wire_code > wire::kMaxDeviceCode || !d.describe_board || !d.make_plant ||
-        d.title.empty() || d.params_file.empty())
+        d.title.empty() || d.params_file.empty() || d.paper.id.empty() || d.paper.title.empty())
       throw Error("device '" + d.name + "': incomplete definition (wire code 1.." +
-                  std::to_string(wire::kMaxDeviceCode) + ", title, parameter file, board and plant required)");
+                  std::to_string(wire::kMaxDeviceCode) +
+                  ", title, paper id and title, parameter file, board and plant required)");
     for (std::size_t j = 0; j < i; ++j) {
       if (all[j].name == d.name || all[j].wire_code == d.wire_code)
         throw Error("devices '" + all[j].name + "' and '" + d.name + "' share a name or a wire code");
@@ -53,6 +54,12 @@ std::string deviceNameList() {
   for (std::size_t i = 0; i < all.size(); ++i)
     out += (i == 0 ? "" : i + 1 == all.size() ? " or " : ", ") + all[i]->name;
   return out;
+}
+
+const DeviceDefinition* findDeviceByPaper(const std::string& paper_id) {
+  for (const DeviceDefinition* d : deviceDefinitions())
+    if (d->paper.id == paper_id) return d;
+  return nullptr;
 }
 
 const DeviceDefinition& findDevice(const std::string& name) {

@@ -12,7 +12,9 @@ DeviceDefinition definition() {
   d.title = "finger exoskeleton";
   d.summary = "finger exoskeleton module, subspace proxy (paper 000)";
   d.wire_code = 1;
-  d.published_link = {"000", 500.0, "USB link to the host at 500 Hz", 1000.0, "board samples at 1 kHz"};
+  d.paper = {"000", "Proxy-Based Haptic Rendering for Underactuated Haptic Devices",
+             "Lobo, Sarac, Verschoor, Solazzi, Frisoli, Otaduy, World Haptics 2017"};
+  d.published_link = {500.0, "USB link to the host at 500 Hz", 1000.0, "board samples at 1 kHz"};
   d.params_file = "exo_finger.json";
   d.describe_board = [](const DeviceDefinition& self, const ParamFile& file, BoardSpec& spec) {
     const ExoFingerModel model = ExoFingerModel::fromParams(file);

@@ -15,7 +15,9 @@ DeviceDefinition definition() {
   d.title = "RHI planar";
   d.summary = "4-DoF planar redundant interface, J^T F + FME null-space control (paper 003)";
   d.wire_code = 3;
-  d.published_link = {"003", kNotPublished, "no rate published", kNotPublished, "no rate published"};
+  d.paper = {"003", "Dynamic Reconfiguration of Redundant Haptic Interfaces for Rendering Soft and Hard Contacts",
+             "Torabi, Zareinia, Sutherland, Tavakoli"};
+  d.published_link = {kNotPublished, "no rate published", kNotPublished, "no rate published"};
   d.params_file = "rhi4.json";
   d.describe_board = &describePlanarLinkageBoard<4, kModel>;
   d.make_plant = &makePlanarLinkagePlant<4, kModel>;

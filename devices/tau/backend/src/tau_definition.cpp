@@ -12,7 +12,9 @@ DeviceDefinition definition() {
   d.title = "TAU";
   d.summary = "TAU-class 6-DoF parallel device, LQR wall on stiff contact (paper 001)";
   d.wire_code = 2;
-  d.published_link = {"001", 1000.0, "control at 1 kHz", 1000.0, "1 kHz sampling (the controller's)"};
+  d.paper = {"001", "A Position-Control Based Approach to Haptic Rendering of Stiff Objects",
+             "Wang, Feng, Andersson, IEEE Transactions on Haptics 2021"};
+  d.published_link = {1000.0, "control at 1 kHz", 1000.0, "1 kHz sampling (the controller's)"};
   d.params_file = "tau.json";
   d.describe_board = [](const DeviceDefinition& self, const ParamFile& file, BoardSpec& spec) {
     const TauModel model = TauModel::fromParams(file);

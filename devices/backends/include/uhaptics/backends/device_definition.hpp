@@ -24,10 +24,17 @@ struct BoardSpec {
   std::string params_path;            // the file it came from
 };
 
+/// The paper whose method the device reproduces, written once here: the reproduction rows name it by
+/// id, and the report and the docs' generated tables head those rows with its title.
+struct PaperRef {
+  std::string id;        // the papers folder's file prefix and the rows' paper column, e.g. "001"
+  std::string title;     // the published title
+  std::string citation;  // short: authors, venue, year
+};
+
 /// What the device's paper states about its link (NaN and "no rate published" where it says nothing),
 /// for the servo tool's rows that set the rates measured here beside the paper's.
 struct PublishedLink {
-  std::string paper;          // e.g. "001"
   double exchange_hz = 0.0;   // host <-> board exchange
   std::string exchange_text;
   double sampling_hz = 0.0;   // the board's sampling
@@ -43,6 +50,8 @@ struct DeviceDefinition {
   std::string summary;
   /// The protocol's device code in every frame, 1 .. wire::kMaxDeviceCode, unique.
   std::uint8_t wire_code = 0;
+  /// The paper it reproduces.
+  PaperRef paper;
   /// Its paper's statements about the link.
   PublishedLink published_link;
   /// Its parameter file in the parameter folder (devices/params).
@@ -64,5 +73,7 @@ const DeviceDefinition& findDevice(const std::string& name);
 const DeviceDefinition* findDevice(wire::DeviceType code);
 /// "exo, tau or rhi": the registered names, for messages.
 std::string deviceNameList();
+/// The first registered device reproducing the paper with this id; nullptr when none does.
+const DeviceDefinition* findDeviceByPaper(const std::string& paper_id);
 
 }  // namespace uhaptics
