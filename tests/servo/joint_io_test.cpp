@@ -53,7 +53,7 @@ struct Driver {
 
 TEST_CASE("joint I/O factory: names, backends and parameter files are checked", "[servo][jointio]") {
   CHECK(jointIoBackends() == std::vector<std::string>{"sim", "emulated", "usb"});
-  CHECK_THROWS_WITH(makeJointIo("phantom", "sim", options()), Catch::Contains("use exo, tau or rhi"));
+  CHECK_THROWS_WITH(makeJointIo("phantom", "sim", options()), Catch::Contains("use " + deviceNameList()));
   CHECK_THROWS_WITH(makeJointIo("tau", "serial", options()), Catch::Contains("use sim, emulated or usb"));
   JointIoOptions missing = options();
   missing.params_dir = "/nonexistent";
