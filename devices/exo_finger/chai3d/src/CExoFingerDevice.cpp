@@ -18,7 +18,7 @@ constexpr double kContactThreshold = 0.05;
 
 cExoFingerDevice::cExoFingerDevice(unsigned int a_deviceNumber, const uhaptics::DeviceSelection& a_selection)
     : cUhapticsDevice(a_deviceNumber, a_selection, 1.0 / 500.0),
-      m_model(std::make_unique<Model>(Model::load(Model::defaultParamsPath(paramsDirectory())))),
+      m_model(std::make_unique<Model>(Model::load(paramsDirectory() + "/exo_finger.json"))),
       m_couplingStiffness(a_selection.option("coupling_stiffness", 1.0, 1e-3, 100.0)) {
   const Model& model = *m_model;
   // Survey the working range: fingertip extent (workspace), actuator lever |d x / d l_x| (for Z_q)
@@ -53,7 +53,7 @@ cExoFingerDevice::cExoFingerDevice(unsigned int a_deviceNumber, const uhaptics::
 
   setCommonSpecifications("finger exoskeleton module", false);
   // Virtual work: F_tip |d tip| = F_act |d l_x|, on average over the working range.
-  m_specifications.m_maxLinearForce = model.forceLimit()(0) / tip_per_length;
+  m_specifications.m_maxLinearForce = model.effortLimits()(0) / tip_per_length;
   // What an application may ask of the proxy: the coupling stiffness seen at the fingertip.
   m_specifications.m_maxLinearStiffness = m_couplingStiffness / tip_lever_sq;
   m_specifications.m_maxLinearDamping = 0.0;  // a position-driven finger: nothing to damp
@@ -63,7 +63,7 @@ cExoFingerDevice::cExoFingerDevice(unsigned int a_deviceNumber, const uhaptics::
   uhaptics::UnderactuatedGains<Model> gains;
   gains.Zx = m_couplingStiffness * uhaptics::Mat2::Identity();
   gains.Zq = Model::ActuatorVector::Constant(m_couplingStiffness * lever_sq).asDiagonal();  // Z_x seen at l_x
-  gains.force_limit = model.forceLimit();
+  gains.force_limit = model.effortLimits();
   m_renderer = std::make_unique<Renderer>(model, gains);
 
   using Kind = uhaptics::RendererFigure::Kind;
@@ -97,7 +97,7 @@ void cExoFingerDevice::startBackend() {
     m_sim.reset();
     Model::JointVector q;
     startBoard(Model::kJoints, Model::kActuated, q.data());
-    uhaptics::update(model, q, m_data);
+    model.forward(q, m_data);
     updateState(0.0);
     return;
   }
@@ -125,7 +125,7 @@ void cExoFingerDevice::startBackend() {
   options.update_rate_hz = 1.0 / getServoPeriod();
   options.force_loop_lag = m_selection.option("force_loop_lag", 1.0, 0.0, 1.0) != 0.0;
   m_sim = std::make_unique<uhaptics::ExoFingerSim>(model, std::move(trajectory), options);
-  uhaptics::update(model, m_sim->state().q, m_data);
+  model.forward(m_sim->state().q, m_data);
   updateState(0.0);
 }
 
@@ -150,7 +150,7 @@ uhaptics::Fault cExoFingerDevice::servoTick(const ServoInput& a_input, double& a
   } else {
     q = m_sim->state().q;
   }
-  uhaptics::update(model, q, m_data);
+  model.forward(q, m_data);
   // The proxy pull in the finger plane (device y, z) -> hand frame -> finger-joint torque.
   const uhaptics::Vec2 f_hand = deviceToPlanar(a_input.force);
   const bool pulled = !f_hand.isZero(0.0);
@@ -188,7 +188,7 @@ uhaptics::Fault cExoFingerDevice::servoTick(const ServoInput& a_input, double& a
   }
   m_sim->command(m_actuator);
   m_sim->step();
-  uhaptics::update(model, m_sim->state().q, m_data);
+  model.forward(m_sim->state().q, m_data);
   updateState(a_input.dt);
   return fault != uhaptics::Fault::kNone ? fault : m_sim->state().fault;
 }

@@ -19,12 +19,12 @@ DeviceDefinition definition() {
   d.published_link = {"003", kNotPublished, "no rate published", kNotPublished, "no rate published"};
   d.params_file = "rhi4.json";
   d.describe_board = [](const DeviceDefinition& self, const ParamFile& file, BoardSpec& spec) {
-    const Rhi4Model model = Rhi4Model::fromFile(spec.params_path, "rhi4");
-    const Vec<4> limits = model.torqueLimits();
+    const Rhi4Model model = Rhi4Model::load(spec.params_path, "rhi4");
+    const Vec<4> limits = model.effortLimits();
     spec.descriptor = DeviceDescriptor::fromParams(file, wire::DeviceType{self.wire_code}, self.title, 4, 4, limits.data());
   };
   d.make_plant = [](const std::string& path) -> std::unique_ptr<BoardPlant> {
-    return std::make_unique<RhiBoardPlant>(Rhi4Model::fromFile(path, "rhi4"), RhiBoardPlant::Options{});
+    return std::make_unique<RhiBoardPlant>(Rhi4Model::load(path, "rhi4"), RhiBoardPlant::Options{});
   };
   return d;
 }

@@ -36,14 +36,14 @@ uhaptics::FmeControllerOptions<2> optionsFrom(const uhaptics::DeviceSelection& s
 
 cRedundantPlanarDevice::cRedundantPlanarDevice(unsigned int a_deviceNumber, const uhaptics::DeviceSelection& a_selection)
     : cUhapticsDevice(a_deviceNumber, a_selection, 1e-3),
-      m_model(std::make_unique<Model>(Model::fromFile(paramsDirectory() + "/rhi4.json", "rhi4"))) {
+      m_model(std::make_unique<Model>(Model::load(paramsDirectory() + "/rhi4.json", "rhi4"))) {
   const Model& model = *m_model;
   try {
-    m_controller = std::make_unique<Controller>(model, model.torqueLimits(), model.home(), optionsFrom(a_selection));
+    m_controller = std::make_unique<Controller>(model, model.effortLimits(), model.homeJoints(), optionsFrom(a_selection));
   } catch (const uhaptics::Error& e) {
     throw uhaptics::Error(std::string("device rhi (options/rhi/...): ") + e.what());
   }
-  model.forward(model.home(), m_centre);
+  model.forward(model.homeJoints(), m_centre);
   using Kind = uhaptics::RendererFigure::Kind;
   m_figureFreeToStiff = sessionStats().declareFigure("free_to_stiff", Kind::kCount);
   m_figureStiffToFree = sessionStats().declareFigure("stiff_to_free", Kind::kCount);
@@ -55,8 +55,8 @@ cRedundantPlanarDevice::cRedundantPlanarDevice(unsigned int a_deviceNumber, cons
   // ellipse sum (tau_i / T_i)^2 <= 1 allow |F| = 1 / sqrt(u^T J W^2 J^T u) along u; the minimum
   // over u (inside the actual box of limits, so conservative).
   Model::Jacobian J;
-  model.jacobian(model.home(), J);
-  const Model::JointVector w = model.torqueLimits().cwiseInverse();
+  model.jacobian(model.homeJoints(), J);
+  const Model::JointVector w = model.effortLimits().cwiseInverse();
   const uhaptics::Mat2 JWWJt = J * w.cwiseAbs2().asDiagonal() * J.transpose();
   const double lambda_max = Eigen::SelfAdjointEigenSolver<uhaptics::Mat2>(JWWJt, Eigen::EigenvaluesOnly).eigenvalues()(1);
 
@@ -66,7 +66,7 @@ cRedundantPlanarDevice::cRedundantPlanarDevice(unsigned int a_deviceNumber, cons
   m_specifications.m_maxLinearDamping = 5.0;       // assumed: well inside 1 kHz stability for these masses
   // Assumed: a 10 cm disc around home keeps the arm far from the 0.786 m reach boundary.
   m_specifications.m_workspaceRadius = a_selection.option("workspace_radius", 0.1, 0.01, 0.3);
-  m_q = model.home();
+  m_q = model.homeJoints();
   updateState();
 }
 
@@ -83,7 +83,7 @@ void cRedundantPlanarDevice::startBackend() {
     startBoard(Model::kJoints, Model::kJoints, m_q.data());
   } else {
     m_sim = std::make_unique<uhaptics::SimulatedPlanarLinkage<4>>(*m_model);
-    m_sim->reset(m_model->home());
+    m_sim->reset(m_model->homeJoints());
     m_q = m_sim->position();
   }
   updateState();

@@ -15,7 +15,7 @@ class RhiServoRenderer final : public DeviceServoRenderer {
   using Controller = FmeNullSpaceController<Rhi4Model>;
   explicit RhiServoRenderer(Rhi4Model model)
       : model_(std::make_unique<const Rhi4Model>(std::move(model))),
-        controller_(*model_, model_->torqueLimits(), model_->home()) {}
+        controller_(*model_, model_->effortLimits(), model_->homeJoints()) {}
 
   void render(const DeviceSnapshot& s, const EffortRequest& r, double* efforts) noexcept override {
     const Vec<4> q = Eigen::Map<const Vec<4>>(s.position.data());
@@ -39,7 +39,7 @@ class RhiServoRenderer final : public DeviceServoRenderer {
 }  // namespace
 
 std::unique_ptr<DeviceServoRenderer> makeServoRenderer(const std::string& params_path) {
-  return std::make_unique<RhiServoRenderer>(Rhi4Model::fromFile(params_path, "rhi4"));
+  return std::make_unique<RhiServoRenderer>(Rhi4Model::load(params_path, "rhi4"));
 }
 
 }  // namespace uhaptics::devices::rhi

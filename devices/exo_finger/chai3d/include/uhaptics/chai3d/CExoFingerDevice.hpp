@@ -86,7 +86,7 @@ class cExoFingerDevice : public cUhapticsDevice {
   std::unique_ptr<const Model> m_model;  // the sim and the renderer keep references to it
   std::unique_ptr<uhaptics::ExoFingerSim> m_sim;
   std::unique_ptr<Renderer> m_renderer;
-  uhaptics::ExoFingerData m_data;
+  uhaptics::ExoFingerData m_data{*m_model};
   double m_couplingStiffness;                       // Z_x (scalar), N m/rad
   uhaptics::Vec2 m_centre = uhaptics::Vec2::Zero();  // fingertip workspace centre, hand frame
   Model::ActuatorVector m_actuator = Model::ActuatorVector::Zero();
