@@ -131,7 +131,7 @@ TEST_CASE("board backend: finger exoskeleton on the emulated board, the finger m
   CHECK(stats.faults == 0);
   CHECK(travel > 5e-3);  // paper 000's flexion-extension moves the fingertip centimetres per cycle
   CHECK(largest_actuator > 0.0);  // the proxy's pull reaches the actuator
-  CHECK(largest_actuator <= device->getModel().forceLimit()(0));
+  CHECK(largest_actuator <= device->getModel().effortLimits()(0));
 }
 
 TEST_CASE("board backend: usb without a board fails to open, says what was found, runs nothing",

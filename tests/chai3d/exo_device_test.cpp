@@ -39,7 +39,7 @@ TEST_CASE("exo: specification complete and consistent with the model", "[chai3d]
   // Fingertip force the 50 N actuator can show: the linkage trades force for travel, so it is of
   // the order of the actuator force divided by the fingertip travel per actuator length (> 1).
   CHECK(info.m_maxLinearForce > 1.0);
-  CHECK(info.m_maxLinearForce < device->getModel().forceLimit()(0));
+  CHECK(info.m_maxLinearForce < device->getModel().effortLimits()(0));
   CHECK(info.m_maxLinearStiffness > 50.0);  // Z_x = 1 N m/rad over a finger's ~7 cm lever
   CHECK(info.m_maxLinearStiffness < 2000.0);
   // Workspace: a finger's reach, centimetres.
@@ -74,8 +74,8 @@ TEST_CASE("exo: the finger moves in the device's y-z plane and joint angles are 
   double q[C_MAX_DOF];
   REQUIRE(device->getJointAnglesRad(q));
   const auto& model = device->getModel();
-  CHECK(q[0] >= model.jointLower()(0) - 1e-9);  // l_x inside the stroke
-  CHECK(q[0] <= model.jointUpper()(0) + 1e-9);
+  CHECK(q[0] >= model.jointLimits().lower(0) - 1e-9);  // l_x inside the stroke
+  CHECK(q[0] <= model.jointLimits().upper(0) + 1e-9);
 }
 
 TEST_CASE("exo: free space renders exactly zero force", "[chai3d][exo]") {
@@ -100,7 +100,7 @@ TEST_CASE("exo: a stock cToolCursor touching a block renders through the subspac
       REQUIRE(scene.tool->start());
       uhaptics::PassivityObserver<2> port;
       double peak_force = 0.0, stored = 0.0;
-      const double zq = device->getModel().forceLimit()(0);  // only for scale below
+      const double zq = device->getModel().effortLimits()(0);  // only for scale below
       (void)zq;
       // The finger's joint motion repeats every 4 s (2000 ticks at 500 Hz): two cycles.
       for (int i = 0; i < 4000; ++i) {
@@ -116,7 +116,7 @@ TEST_CASE("exo: a stock cToolCursor touching a block renders through the subspac
       const auto stats = device->getSessionStats();
       CHECK(stats.contacts >= 2);   // one dip per cycle at least
       CHECK(peak_force > 1.0);      // newtons at the actuator, not numerical dust
-      CHECK(peak_force <= device->getModel().forceLimit()(0));
+      CHECK(peak_force <= device->getModel().effortLimits()(0));
       CHECK(stats.faults == 0);
       INFO("energy out " << port.energyOut() << " J, peak stored " << stored << " J, peak out " << port.peakEnergyOut());
       // Passive: over whole cycles of a position-driven finger against a static, frictionless
@@ -190,7 +190,7 @@ TEST_CASE("exo: renderer figures: proxy solves, contact ticks, proxy distance an
         CHECK(distance->value > 0.1);       // millimetres of proxy travel, not numerical dust
         CHECK(distance->value < 1e3 * 2.0 * device->getSpecifications().m_workspaceRadius);
         CHECK(actuator->value > 1.0);       // newtons at the actuator
-        CHECK(actuator->value <= model.forceLimit()(0));
+        CHECK(actuator->value <= model.effortLimits()(0));
       } else {
         CHECK(pulled == 0);
         CHECK(contact_ticks->value == 0.0);

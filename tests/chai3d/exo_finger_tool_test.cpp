@@ -174,7 +174,7 @@ TEST_CASE("exo finger tool: a box pressed on one phalanx loads only that phalanx
       }
       // The device rendered it through the subspace proxy: a nonzero, bounded actuator force.
       CHECK(std::abs(device->getActuatorForce()) > 0.01);
-      CHECK(std::abs(device->getActuatorForce()) <= device->getModel().forceLimit()(0));
+      CHECK(std::abs(device->getActuatorForce()) <= device->getModel().effortLimits()(0));
       CHECK(device->getLastFault() == uhaptics::Fault::kNone);
     }
   }

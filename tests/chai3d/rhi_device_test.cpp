@@ -72,12 +72,12 @@ TEST_CASE("rhi: specification complete and consistent with the model", "[chai3d]
   // half of some joint's limit (the ellipse inscribed in the 4-D torque box touches it at most
   // a factor sqrt(4) = 2 inside).
   Model::Jacobian J;
-  model.jacobian(model.home(), J);
+  model.jacobian(model.homeJoints(), J);
   double worst_use = 0.0;
   for (int k = 0; k < 360; ++k) {
     const double a = k * M_PI / 180.0;
     const Model::JointVector tau = J.transpose() * (info.m_maxLinearForce * uhaptics::Vec2(std::cos(a), std::sin(a)));
-    const double use = (tau.cwiseAbs().array() / model.torqueLimits().array()).maxCoeff();
+    const double use = (tau.cwiseAbs().array() / model.effortLimits().array()).maxCoeff();
     CHECK(use <= 1.0 + 1e-12);
     worst_use = std::max(worst_use, use);
   }
@@ -88,7 +88,7 @@ TEST_CASE("rhi: specification complete and consistent with the model", "[chai3d]
   CHECK_FALSE(device->getJointAnglesRad(q));  // closed: not ready
   REQUIRE(device->open());
   REQUIRE(device->getJointAnglesRad(q));
-  for (int i = 0; i < 4; ++i) CHECK(q[i] == model.home()(i));
+  for (int i = 0; i < 4; ++i) CHECK(q[i] == model.homeJoints()(i));
   CHECK(q[4] == 0.0);  // only four joints
   cVector3d p;
   REQUIRE(device->getPosition(p));
@@ -212,7 +212,7 @@ TEST_CASE("rhi: in an empty scene the null-space torque ramps up from zero and s
   const double bound = options.max_null_space_torque, ramp = options.null_space_ramp_time;
   CHECK(bound == cRedundantPlanarDevice::kDefaultMaxNullSpaceTorque);
   CHECK(ramp == cRedundantPlanarDevice::kDefaultNullSpaceRampTime);
-  CHECK(bound <= 0.5 * device->getModel().torqueLimits().minCoeff());  // well below every actuator's limit
+  CHECK(bound <= 0.5 * device->getModel().effortLimits().minCoeff());  // well below every actuator's limit
   device->setLockStep(true);
   ToolScene scene(device, 0.005);
   REQUIRE(scene.tool->start());

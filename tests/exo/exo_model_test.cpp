@@ -11,7 +11,7 @@
 using namespace uhaptics;
 
 namespace {
-const std::string kParams = ExoFingerModel::defaultParamsPath(test::paramsDir());
+const std::string kParams = test::paramsPath("exo_finger.json");
 const ExoFingerModel& model() { return test::exoModel(); }
 std::string shippedText() { return test::readFile(kParams); }
 // Replaces the first occurrence of `from` in the shipped file.
@@ -29,8 +29,8 @@ ExoFingerModel::TaskVector gridPoint(const ExoFingerModel& m, int i, int j, int 
 
 TEST_CASE("shipped parameters load and describe an L16-class finger module") {
   const auto& m = model();
-  CHECK(m.forceLimit()(0) == 50.0);
-  CHECK(m.jointUpper()(0) - m.jointLower()(0) == Approx(0.050));
+  CHECK(m.effortLimits()(0) == 50.0);
+  CHECK(m.jointLimits().upper(0) - m.jointLimits().lower(0) == Approx(0.050));
   CHECK(m.hostRateHz() == 500.0);
   CHECK(m.taskUpper()(0) == Approx(M_PI / 2));
   CHECK(m.taskUpper()(1) == Approx(100.0 * M_PI / 180.0));
@@ -93,7 +93,7 @@ TEST_CASE("the map is one-to-one with a nonsingular Jacobian on a dense grid") {
   for (int i = 0; i < n; ++i) {
     for (int j = 0; j < n; ++j) {
       const ExoFingerModel::JointVector q =
-          m.jointLower() + (m.jointUpper() - m.jointLower())
+          m.jointLimits().lower + (m.jointLimits().upper - m.jointLimits().lower)
                                .cwiseProduct(ExoFingerModel::JointVector(double(i) / (n - 1), double(j) / (n - 1)));
       if (!m.inWorkingRange(q)) continue;
       ++states;

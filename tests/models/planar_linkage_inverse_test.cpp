@@ -75,7 +75,7 @@ TEST_CASE("Planar linkage inverse kinematics: from home to reachable points of t
   const Rhi4Model& model = test::rhi4Model();
   const Vec2 base = model.parameters().base;
   for (const Vec2& offset : {Vec2(0.1, 0.05), Vec2(-0.2, 0.1), Vec2(0.0, -0.25), Vec2(0.3, 0.3)}) {
-    Vec4 q = model.home();
+    Vec4 q = model.homeJoints();
     REQUIRE(model.inverse(base + offset, q) == Fault::kNone);
     CHECK((forwardOf(model, q) - (base + offset)).norm() <= 1e-9);
   }
@@ -85,7 +85,7 @@ TEST_CASE("Planar linkage inverse kinematics: unreachable and singular targets f
   const Rhi4Model& model = test::rhi4Model();
   const Vec2 base = model.parameters().base;
   const double reach = model.reach();
-  const Vec4 home = model.home();
+  const Vec4 home = model.homeJoints();
 
   // Outside the reachable disc.
   Vec4 q = home;
@@ -139,10 +139,10 @@ TEST_CASE("Planar linkage inverse kinematics: unreachable and singular targets f
 
 TEST_CASE("Planar linkage: whole turns of a joint are undone by the wrap to the nearest equivalent") {
   const Rhi4Model& model = test::rhi4Model();
-  const Vec4 q = model.home() + Vec4(0.1, -0.2, 0.3, -0.4);
+  const Vec4 q = model.homeJoints() + Vec4(0.1, -0.2, 0.3, -0.4);
   const Vec4 turned = q + 2.0 * M_PI * Vec4(1.0, -2.0, 0.0, 3.0);
   CHECK((forwardOf(model, turned) - forwardOf(model, q)).norm() < 1e-12);
   Vec4 back;
-  model.nearestEquivalent(turned, model.home(), back);
+  model.nearestEquivalent(turned, model.homeJoints(), back);
   CHECK((back - q).cwiseAbs().maxCoeff() < 1e-12);
 }

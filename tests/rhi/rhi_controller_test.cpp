@@ -17,7 +17,7 @@ bool withinLimits(const Vec<4>& tau, const Vec<4>& limits) {
 }  // namespace
 
 TEST_CASE("K and zeta at the RHI home configuration are the paper's 123 and 3.3") {
-  const rhi::Rhi4Controller c(rhi4(), rhi4().torqueLimits(), rhi4().home());
+  const rhi::Rhi4Controller c(rhi4(), rhi4().effortLimits(), rhi4().homeJoints());
   // The paper prints 123 and 3.3: equal within that rounding (half a unit in the last digit).
   CHECK(c.majorAxis() == Approx(123.0).margin(0.5));
   CHECK(c.minorAxis() == Approx(3.3).margin(0.05));
@@ -28,7 +28,7 @@ TEST_CASE("K and zeta at the RHI home configuration are the paper's 123 and 3.3"
 
 TEST_CASE("analytic gradient of nu matches central differences at random configurations") {
   const auto& m = rhi4();
-  const Vec<4> w2 = fme::inverseSquaredLimits(m.torqueLimits());
+  const Vec<4> w2 = fme::inverseSquaredLimits(m.effortLimits());
   std::mt19937 rng(11);
   std::uniform_real_distribution<double> unit(0.0, 1.0);
   int checked = 0;
@@ -57,7 +57,7 @@ TEST_CASE("analytic gradient of nu matches central differences at random configu
 
 TEST_CASE("the null-space torque produces no end-effector force or acceleration") {
   const auto& m = rhi4();
-  rhi::Rhi4Controller c(m, m.torqueLimits(), m.home());
+  rhi::Rhi4Controller c(m, m.effortLimits(), m.homeJoints());
   std::mt19937 rng(2);
   std::normal_distribution<double> n01;
   for (int trial = 0; trial < 30; ++trial) {
@@ -79,7 +79,7 @@ TEST_CASE("the null-space torque produces no end-effector force or acceleration"
 
 TEST_CASE("the controller keeps every command within the torque limits and scales force along its direction") {
   const auto& m = rhi4();
-  rhi::Rhi4Controller c(m, m.torqueLimits(), m.home());
+  rhi::Rhi4Controller c(m, m.effortLimits(), m.homeJoints());
   std::mt19937 rng(8);
   std::normal_distribution<double> n01;
   for (int trial = 0; trial < 200; ++trial) {
@@ -88,7 +88,7 @@ TEST_CASE("the controller keeps every command within the torque limits and scale
     const Vec2 F = 40.0 * Vec2(n01(rng), n01(rng));  // mostly beyond what the device can do
     Vec<4> tau;
     const Fault f = c.tick(0.001 * trial, q, qd, F, tau);
-    REQUIRE(withinLimits(tau, m.torqueLimits()));
+    REQUIRE(withinLimits(tau, m.effortLimits()));
     if (f != Fault::kNone) continue;
     const auto& st = c.status();
     CHECK(st.observer >= 0.0);
@@ -97,14 +97,14 @@ TEST_CASE("the controller keeps every command within the torque limits and scale
     CHECK(st.alpha <= 1.0);
     CHECK(std::abs(st.force(0) * F(1) - st.force(1) * F(0)) <= 1e-9 * F.squaredNorm());
     CHECK(st.force.dot(F) >= 0.0);
-    CHECK(withinLimits(st.tau_primary, m.torqueLimits()));
-    if (st.alpha < 1.0) CHECK((st.tau_primary.cwiseAbs() - m.torqueLimits()).maxCoeff() == Approx(0.0).margin(1e-12));
+    CHECK(withinLimits(st.tau_primary, m.effortLimits()));
+    if (st.alpha < 1.0) CHECK((st.tau_primary.cwiseAbs() - m.effortLimits()).maxCoeff() == Approx(0.0).margin(1e-12));
   }
 }
 
 TEST_CASE("bad input gives a fault and a safe command") {
   const auto& m = rhi4();
-  rhi::Rhi4Controller c(m, m.torqueLimits(), m.home());
+  rhi::Rhi4Controller c(m, m.effortLimits(), m.homeJoints());
   Vec<4> tau;
   const Vec<4> q(0.3, 0.2, -0.4, 0.5);
   SECTION("non-finite state or force: zero torque") {
@@ -124,7 +124,7 @@ TEST_CASE("bad input gives a fault and a safe command") {
     Mat<2, 4> J;
     m.jacobian(aligned, J);
     Vec<4> primary = J.transpose() * F;
-    scaleIntoBox(primary, m.torqueLimits());
+    scaleIntoBox(primary, m.effortLimits());
     CHECK((tau - primary).norm() < 1e-12);
     CHECK(c.status().tau_null.isZero());
   }
@@ -150,17 +150,17 @@ TEST_CASE("bad input gives a fault and a safe command") {
     o.motion_direction.setZero();
     CHECK(c.setOptions(o) == Fault::kInvalidParameter);
     CHECK(c.options().beta == 20.0);
-    CHECK_THROWS_AS(rhi::Rhi4Controller(m, Vec<4>(3, 3, 0, 1), m.home()), Error);
-    CHECK_THROWS_AS(rhi::Rhi4Controller(m, m.torqueLimits(), Vec<4>(0.0, M_PI / 2, -M_PI / 2, 0.0)), Error);
+    CHECK_THROWS_AS(rhi::Rhi4Controller(m, Vec<4>(3, 3, 0, 1), m.homeJoints()), Error);
+    CHECK_THROWS_AS(rhi::Rhi4Controller(m, m.effortLimits(), Vec<4>(0.0, M_PI / 2, -M_PI / 2, 0.0)), Error);
     o.motion_direction = Vec2(0, 1);
     o.mu = -1.0;
-    CHECK_THROWS_AS(rhi::Rhi4Controller(m, m.torqueLimits(), m.home(), o), Error);
+    CHECK_THROWS_AS(rhi::Rhi4Controller(m, m.effortLimits(), m.homeJoints(), o), Error);
   }
 }
 
 TEST_CASE("the controller tick allocates nothing, with and without contact") {
   const auto& m = rhi4();
-  rhi::Rhi4Controller c(m, m.torqueLimits(), m.home());
+  rhi::Rhi4Controller c(m, m.effortLimits(), m.homeJoints());
   Vec<4> tau;
   const Vec<4> q(0.3, 0.2, -0.4, 0.5), qd(0.1, -0.2, 0.3, 0.0);
   tools::AllocationScope scope;
@@ -177,7 +177,7 @@ TEST_CASE("the controller tick allocates nothing, with and without contact") {
 
 TEST_CASE("free-motion ticks skip the contact-only work") {
   const auto& m = rhi4();
-  rhi::Rhi4Controller c(m, m.torqueLimits(), m.home());
+  rhi::Rhi4Controller c(m, m.effortLimits(), m.homeJoints());
   Vec<4> tau;
   const Vec<4> q(0.3, 0.2, -0.4, 0.5);
   c.tick(0.0, q, Vec<4>::Zero(), Vec2::Zero(), tau);

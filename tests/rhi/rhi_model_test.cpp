@@ -113,9 +113,9 @@ TEST_CASE("the simulated RHI saturates torques and brakes with friction") {
 TEST_CASE("planar3 example device matches the paper's FME at q0") {
   const auto& m = test::planar3Model();
   Mat<2, 3> J;
-  m.jacobian(m.home(), J);
+  m.jacobian(m.homeJoints(), J);
   Mat2 fme;
-  REQUIRE(fme::weightedFme(J, fme::inverseSquaredLimits(m.torqueLimits()), fme));
+  REQUIRE(fme::weightedFme(J, fme::inverseSquaredLimits(m.effortLimits()), fme));
   const auto s = fme::ellipsoidScales(fme, 1.0);
   // Paper: M_free = diag(0.2 x 2.6, 5 x 5.8): eigenvalues of M_hat at q0 printed to 2 digits.
   CHECK(s.major == Approx(5.8).margin(0.05));
@@ -124,9 +124,9 @@ TEST_CASE("planar3 example device matches the paper's FME at q0") {
 
 TEST_CASE("malformed RHI parameter files are rejected with a clear error") {
   const std::string dir = test::paramsDir();
-  CHECK_THROWS_WITH(Rhi4Model::fromFile(dir + "/planar3.json", "rhi4"), Catch::Contains("expected 'rhi4'"));
-  CHECK_THROWS_WITH(Planar3Model::fromFile(dir + "/rhi4.json", "rhi4"), Catch::Contains("joints"));
-  CHECK_THROWS_AS(Rhi4Model::fromFile(dir + "/missing.json", "rhi4"), Error);
+  CHECK_THROWS_WITH(Rhi4Model::load(dir + "/planar3.json", "rhi4"), Catch::Contains("expected 'rhi4'"));
+  CHECK_THROWS_WITH(Planar3Model::load(dir + "/rhi4.json", "rhi4"), Catch::Contains("joints"));
+  CHECK_THROWS_AS(Rhi4Model::load(dir + "/missing.json", "rhi4"), Error);
   auto p = rhi4().parameters();
   p.link_length(2) = -0.1;
   CHECK_THROWS_WITH(Rhi4Model(p), Catch::Contains("link_length[2]"));
@@ -147,7 +147,7 @@ TEST_CASE("malformed RHI parameter files are rejected with a clear error") {
 TEST_CASE("RHI joint limits: parallelogram internal angles in [30, 150] deg, motors within 90 deg of home") {
   const auto& l = rhi4().jointLimits();
   REQUIRE(l.any());
-  CHECK(l.distance(rhi4().home()) == Approx(M_PI / 3));  // both internal angles at 90 deg, 60 deg from a stop
+  CHECK(l.distance(rhi4().homeJoints()) == Approx(M_PI / 3));  // both internal angles at 90 deg, 60 deg from a stop
   // Links 1 and 2 folded flat (q1 - q2 + 90 deg = 0) or links 3 and 4 stretched straight are outside.
   CHECK_FALSE(l.contains(Vec<4>(0.0, M_PI / 2, 0.0, 0.0)));
   CHECK_FALSE(l.contains(Vec<4>(0.0, 0.0, 0.0, M_PI / 2)));

@@ -32,10 +32,10 @@ TEST_CASE("null-space envelope: rises from zero after reset and after a fault, b
   const double bound = 0.5, ramp = 0.25, dt = 1e-3;
   o.max_null_space_torque = bound;
   o.null_space_ramp_time = ramp;
-  rhi::Rhi4Controller enveloped(m, m.torqueLimits(), m.home(), o), paper(m, m.torqueLimits(), m.home());
+  rhi::Rhi4Controller enveloped(m, m.effortLimits(), m.homeJoints(), o), paper(m, m.effortLimits(), m.homeJoints());
   // A fixed state at home, so the command (5.4 N m, above the bound) is the same every tick and
   // every change of tau_N is the envelope's.
-  const Vec<4> q = m.home(), qd = Vec<4>::Zero();
+  const Vec<4> q = m.homeJoints(), qd = Vec<4>::Zero();
   Vec<4> tau, tau_paper;
   auto run = [&](int first, int ticks) {
     Vec<4> previous = enveloped.status().tau_null;
@@ -77,7 +77,7 @@ TEST_CASE("null-space envelope: rises from zero after reset and after a fault, b
 
 TEST_CASE("envelope options: invalid values are refused, the defaults are the paper's controller") {
   const auto& m = rhi4();
-  rhi::Rhi4Controller c(m, m.torqueLimits(), m.home());
+  rhi::Rhi4Controller c(m, m.effortLimits(), m.homeJoints());
   CHECK(std::isinf(c.options().max_null_space_torque));
   CHECK(c.options().null_space_ramp_time == 0.0);
   CHECK(c.options().stiff_direction_time == 0.0);
@@ -102,8 +102,8 @@ TEST_CASE("the stiff ellipsoid follows the contact force through its filter and 
   const double dt = 1e-3, filter = 0.02;
   rhi::Rhi4Controller::Options o;
   o.stiff_direction_time = filter;
-  rhi::Rhi4Controller c(m, m.torqueLimits(), m.home(), o);
-  const Vec<4> q = m.home(), qd = Vec<4>::Zero();
+  rhi::Rhi4Controller c(m, m.effortLimits(), m.homeJoints(), o);
+  const Vec<4> q = m.homeJoints(), qd = Vec<4>::Zero();
   Vec<4> tau;
   int k = 0;
   auto tick = [&](const Vec2& F) {
@@ -137,7 +137,7 @@ TEST_CASE("the stiff ellipsoid follows the contact force through its filter and 
     CHECK((c.stiffEllipsoid() - held).norm() == 0.0);
   }
   // The control: without the filter the axis takes each tick's force (the paper).
-  rhi::Rhi4Controller paper(m, m.torqueLimits(), m.home());
+  rhi::Rhi4Controller paper(m, m.effortLimits(), m.homeJoints());
   REQUIRE(paper.tick(0.0, q, qd, push, tau) == Fault::kNone);
   REQUIRE(paper.tick(dt, q, qd, turned, tau) == Fault::kNone);
   CHECK(std::abs(majorAxis(paper.stiffEllipsoid()).dot(turned.normalized())) == Approx(1.0).margin(1e-12));
@@ -149,7 +149,7 @@ TEST_CASE("the joint-limit brake removes dt / limit_brake_time of the excess app
   // it at excess / limit_brake_time, at every configuration where the null space can move it.
   const auto& m = rhi4();
   const rhi::Rhi4Controller::Options o;
-  rhi::Rhi4Controller c(m, m.torqueLimits(), m.home(), o);
+  rhi::Rhi4Controller c(m, m.effortLimits(), m.homeJoints(), o);
   const JointLimits<4>& limits = m.jointLimits();
   const Mat<4, 4> C = limits.map;
   const Mat<4, 4> Cinv = C.inverse();

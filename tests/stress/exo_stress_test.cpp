@@ -20,8 +20,8 @@ UnderactuatedGains<Model> gainsWith(double zx, double zq) { return test::exoGain
 // Every tick either faults with an exactly-zero command, or returns a finite command within limits.
 template <class Renderer>
 void hammer(Renderer& r, stress::AdversarialSource& src, int n, stress::Tally& t) {
-  const auto& lo = model().jointLower();
-  const auto& hi = model().jointUpper();
+  const auto& lo = model().jointLimits().lower;
+  const auto& hi = model().jointLimits().upper;
   const auto& xlo = model().taskLower();
   const auto& xhi = model().taskUpper();
   Vec<1> tau;
@@ -35,7 +35,7 @@ void hammer(Renderer& r, stress::AdversarialSource& src, int n, stress::Tally& t
       if (!tau.isZero(0.0)) ++t.violations;
     } else {
       if (r.last().clamped) ++t.clamped;
-      if (!tau.allFinite() || std::abs(tau(0)) > model().forceLimit()(0)) ++t.violations;
+      if (!tau.allFinite() || std::abs(tau(0)) > model().effortLimits()(0)) ++t.violations;
     }
   }
 }
@@ -159,7 +159,7 @@ TEST_CASE("exo renderers refuse a state the model flags outside its working rang
   NullSpaceRenderer<Model> b(model(), gains);
   LinearizedSubspaceRenderer<Model> c(model(), gains);
   NonlinearSubspaceRenderer<Model> d(model(), gains);
-  const Vec2 lo = model().jointLower(), hi = model().jointUpper();
+  const Vec2 lo = model().jointLimits().lower, hi = model().jointLimits().upper;
   const Vec2 mid = 0.5 * (lo + hi);
   const Vec2 proxy = 0.5 * (model().taskLower() + model().taskUpper());
   int refused = 0;

@@ -488,8 +488,8 @@ TEST_CASE("Exoskeleton forward kinematics: exact round trips for every real conf
   // documents inWorkingRange() as the test of a real configuration: a continued x must never be
   // reported as real.
   stress::AdversarialSource src(47);
-  const auto& jl = exo().jointLower();
-  const auto& ju = exo().jointUpper();
+  const auto& jl = exo().jointLimits().lower;
+  const auto& ju = exo().jointLimits().upper;
   long tried = 0, exact = 0, flagged = 0, wrong = 0;
   double worst = 0.0;
   for (int k = 0; k < 4000 * stress::scale(); ++k) {

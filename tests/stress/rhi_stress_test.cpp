@@ -63,7 +63,7 @@ Vec<N> nearSingular(stress::AdversarialSource& src) {
 
 template <int N>
 void judge(const FmeNullSpaceController<PlanarLinkageModel<N>>& c, Fault f, const Vec<N>& tau, stress::Tally& t) {
-  const Vec<N>& limit = model<N>().torqueLimits();
+  const Vec<N>& limit = model<N>().effortLimits();
   ++t.cases;
   const bool within = tau.allFinite() && (tau.cwiseAbs().array() <= limit.array()).all();
   if (!within) ++t.violations;
@@ -92,7 +92,7 @@ void hammerController(std::uint64_t seed, int per_option_set, StressCounts<N>& o
   using Controller = FmeNullSpaceController<PlanarLinkageModel<N>>;
   const auto& m = model<N>();
   stress::AdversarialSource src(seed);
-  Controller c(m, m.torqueLimits(), m.home());
+  Controller c(m, m.effortLimits(), m.homeJoints());
   for (int o = 0; o < 10; ++o) {
     typename Controller::Options opt;
     opt.beta = src.logUniform(0, 9);
@@ -195,8 +195,8 @@ PlanarEnergy interact(const typename FmeNullSpaceController<PlanarLinkageModel<N
   using Controller = FmeNullSpaceController<PlanarLinkageModel<N>>;
   const auto& m = model<N>();
   SimulatedPlanarLinkage<N> sim(m);
-  sim.reset(m.home());
-  Controller c(m, m.torqueLimits(), m.home(), opt);
+  sim.reset(m.homeJoints());
+  Controller c(m, m.effortLimits(), m.homeJoints(), opt);
   const double dt = 1e-3, k_wall = 1000.0, k_hand = 300.0, b_hand = 3.0;
   const Vec2 start = sim.endEffectorPosition();
   const Vec2 u(0.0, 1.0);

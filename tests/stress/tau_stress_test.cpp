@@ -58,7 +58,7 @@ void judge(const WallCommand& cmd, stress::Tally& t) {
   }
   if (cmd.saturated) ++t.clamped;
   const bool within = cmd.torque.allFinite() &&
-                      (cmd.torque.cwiseAbs().array() <= model().torqueLimit().array()).all();
+                      (cmd.torque.cwiseAbs().array() <= model().effortLimits().array()).all();
   if (!within) ++t.violations;
 }
 

@@ -14,21 +14,21 @@ inline const TauModel& tauModel() {
   return m;
 }
 
-/// The finger exoskeleton's default parameter file.
+/// devices/params/exo_finger.json: paper 000's finger exoskeleton.
 inline const ExoFingerModel& exoModel() {
-  static const ExoFingerModel m = ExoFingerModel::load(ExoFingerModel::defaultParamsPath(paramsDir()));
+  static const ExoFingerModel m = ExoFingerModel::load(paramsPath("exo_finger.json"));
   return m;
 }
 
 /// devices/params/rhi4.json: paper 003's 4-DoF redundant interface.
 inline const Rhi4Model& rhi4Model() {
-  static const Rhi4Model m = Rhi4Model::fromFile(paramsPath("rhi4.json"), "rhi4");
+  static const Rhi4Model m = Rhi4Model::load(paramsPath("rhi4.json"), "rhi4");
   return m;
 }
 
 /// devices/params/planar3.json: paper 003's 3-DoF example arm.
 inline const Planar3Model& planar3Model() {
-  static const Planar3Model m = Planar3Model::fromFile(paramsPath("planar3.json"), "planar3");
+  static const Planar3Model m = Planar3Model::load(paramsPath("planar3.json"), "planar3");
   return m;
 }
 

@@ -19,7 +19,7 @@ inline UnderactuatedGains<ExoFingerModel> exoGains(double zx, double zq) {
   UnderactuatedGains<ExoFingerModel> g;
   g.Zx = zx * Mat2::Identity();
   g.Zq(0, 0) = zq;
-  g.force_limit = exoModel().forceLimit();
+  g.force_limit = exoModel().effortLimits();
   return g;
 }
 

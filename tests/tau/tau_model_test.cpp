@@ -71,7 +71,7 @@ TEST_CASE("TAU statics: a 15 N + 3 sigma push anywhere on the wall needs well un
       REQUIRE(m.forward(q, data) == Fault::kNone);
       m.computeGravity(q, data);
       const Vec6 tau = data.gravity - data.J.topRows<3>().transpose() * Vec3(0.0, 0.0, -push);
-      worst = std::max(worst, tau.cwiseQuotient(m.torqueLimit()).cwiseAbs().maxCoeff());
+      worst = std::max(worst, tau.cwiseQuotient(m.effortLimits()).cwiseAbs().maxCoeff());
     }
   WARN("16.5 N push on the wall: worst static joint torque " << 100.0 * worst << " % of the saturation");
   CHECK(worst < 0.5);

@@ -15,7 +15,7 @@ using namespace uhaptics;
 using Model = ExoFingerModel;
 
 const Model& model() {
-  static const Model m = Model::load(Model::defaultParamsPath(UHAPTICS_PARAMS_DIR));
+  static const Model m = Model::load(std::string(UHAPTICS_PARAMS_DIR) + "/exo_finger.json");
   return m;
 }
 
@@ -23,7 +23,7 @@ UnderactuatedGains<Model> fig4Gains() {
   UnderactuatedGains<Model> g;
   g.Zx = (1.0 / (48.3 * 48.3)) * Mat2::Identity();  // Z_q / avg(|J_a|)^2, Fig. 4 normalization
   g.Zq(0, 0) = 1.0;
-  g.force_limit = model().forceLimit();
+  g.force_limit = model().effortLimits();
   return g;
 }
 

@@ -14,7 +14,7 @@ using namespace uhaptics;
 using Controller = FmeNullSpaceController<Rhi4Model>;
 
 const Rhi4Model& model() {
-  static const Rhi4Model m = Rhi4Model::fromFile(std::string(UHAPTICS_PARAMS_DIR) + "/rhi4.json", "rhi4");
+  static const Rhi4Model m = Rhi4Model::load(std::string(UHAPTICS_PARAMS_DIR) + "/rhi4.json", "rhi4");
   return m;
 }
 
@@ -25,7 +25,7 @@ const Vec<4> kQd(0.05, -0.02, 0.1, 0.0);
 // Richardson-extrapolated (error O(h^6) ~ 1e-17 at h = 2e-3, rounding ~ eps |nu| / h ~ 1e-13): an
 // independent route (values of nu only) that is tighter than both methods it judges.
 Vec<4> referenceGradient(const Mat2& Mdes) {
-  const Vec<4> w2 = fme::inverseSquaredLimits(model().torqueLimits());
+  const Vec<4> w2 = fme::inverseSquaredLimits(model().effortLimits());
   const auto fivePoint = [&](int k, double h) {
     double v[4];
     const double steps[4] = {-2 * h, -h, h, 2 * h};
@@ -44,7 +44,7 @@ Vec<4> referenceGradient(const Mat2& Mdes) {
 void tickBenchmark(benchmark::State& state, fme::GradientMethod method, const Vec2& force) {
   Controller::Options o;
   o.gradient = method;
-  Controller c(model(), model().torqueLimits(), model().home(), o);
+  Controller c(model(), model().effortLimits(), model().homeJoints(), o);
   Vec<4> tau;
   double t = 0.0;
   tools::AllocationScope scope;
@@ -56,7 +56,7 @@ void tickBenchmark(benchmark::State& state, fme::GradientMethod method, const Ve
   state.counters["allocs_per_tick"] =
       benchmark::Counter(static_cast<double>(scope.count()) / static_cast<double>(state.iterations()));
   // Gradient error against the 5-point reference, relative to its norm.
-  const Vec<4> w2 = fme::inverseSquaredLimits(model().torqueLimits());
+  const Vec<4> w2 = fme::inverseSquaredLimits(model().effortLimits());
   Mat<2, 4> J;
   model().jacobian(kQ, J);
   double nu = 0.0;
@@ -78,7 +78,7 @@ void BM_RhiTickFreeMotion(benchmark::State& s) { tickBenchmark(s, fme::GradientM
 // The gradient alone (no projection, no observer), both ways; finite differences at the relative
 // step 10^-range(0) (6e-6, centralDifferenceStep's default, is the library's choice).
 void gradientBenchmark(benchmark::State& state, fme::GradientMethod method, double fd_step = 6.0e-6) {
-  const Vec<4> w2 = fme::inverseSquaredLimits(model().torqueLimits());
+  const Vec<4> w2 = fme::inverseSquaredLimits(model().effortLimits());
   Mat2 Mdes;
   fme::axisAlignedEllipsoid(Vec2(0.0, 1.0), 3.3, 123.0, Mdes);
   Mat<2, 4> J;

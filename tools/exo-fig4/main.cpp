@@ -21,7 +21,7 @@ using namespace uhaptics;
 int main(int argc, char** argv) {
   CLI::App app{"Paper 000, Fig. 4: displayed impedance of four renderers on the finger exoskeleton"};
   std::string out = "out/exo-fig4";
-  std::string params = ExoFingerModel::defaultParamsPath(defaultParamsDirectory());
+  std::string params = defaultParamsDirectory() + "/exo_finger.json";
   std::string method = "gn";
   exo::Fig4Options o;
   app.add_option("--out", out, "output folder")->capture_default_str();

@@ -18,7 +18,7 @@ class PlanarFmeServoRenderer final : public DeviceServoRenderer {
   using Controller = FmeNullSpaceController<Model>;
   explicit PlanarFmeServoRenderer(Model model)
       : model_(std::make_unique<const Model>(std::move(model))),
-        controller_(*model_, model_->torqueLimits(), model_->home()) {}
+        controller_(*model_, model_->effortLimits(), model_->homeJoints()) {}
 
   void render(const DeviceSnapshot& s, const EffortRequest& r, double* efforts) noexcept override {
     const Vec<N> q = Eigen::Map<const Vec<N>>(s.position.data());

@@ -12,7 +12,7 @@ template <int N>
 SimulatedPlanarLinkage<N>::SimulatedPlanarLinkage(Model model, double substep)
     : model_(std::move(model)), substep_(substep) {
   if (!(substep > 0.0) || !std::isfinite(substep)) throw Error("simulated planar linkage: substep must be positive");
-  reset(model_.home());
+  reset(model_.homeJoints());
 }
 
 template <int N>
@@ -45,7 +45,7 @@ Fault SimulatedPlanarLinkage<N>::step(const JointVector& tau_command, double dt)
   Fault fault = Fault::kNone;
   tau_applied_ = tau_command;
   if (zeroIfNonFinite(tau_applied_) != Fault::kNone) fault = Fault::kNonFiniteInput;
-  clampSymmetric(tau_applied_, model_.torqueLimits());  // the amplifiers saturate
+  clampSymmetric(tau_applied_, model_.effortLimits());  // the amplifiers saturate
   const long n = std::max(1L, std::lround(dt / substep_));
   const double h = dt > 0.0 && std::isfinite(dt) ? dt / static_cast<double>(n) : substep_;
   for (long i = 0; i < n; ++i) substep(h);

@@ -50,9 +50,13 @@ PlanarLinkageModel<N>::PlanarLinkageModel(Parameters p) : p_(std::move(p)) {
 }
 
 template <int N>
-PlanarLinkageModel<N> PlanarLinkageModel<N>::fromFile(const std::string& path, const std::string& device) {
-  const ParamFile f = ParamFile::load(path);
-  f.requireFormat(device, 1);
+PlanarLinkageModel<N> PlanarLinkageModel<N>::load(const std::string& path, const std::string& device) {
+  return fromParams(ParamFile::load(path), device);
+}
+
+template <int N>
+PlanarLinkageModel<N> PlanarLinkageModel<N>::fromParams(const ParamFile& f, const std::string& device) {
+  f.requireFormat(device, kFormatVersion);
   if (f.integer("joints", N, N) != N) f.fail("wrong number of joints");
   Parameters p;
   p.device = device;

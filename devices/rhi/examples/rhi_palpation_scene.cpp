@@ -94,10 +94,10 @@ int main(int argc, char** argv) {
     ellipse->m_material->setBlueCornflower();
     ellipse->setUseTransparency(true);
     ellipse->setTransparencyLevel(0.5f);
-    const Model::JointVector inv_limits_sq = uhaptics::fme::inverseSquaredLimits<4>(model.torqueLimits());
+    const Model::JointVector inv_limits_sq = uhaptics::fme::inverseSquaredLimits<4>(model.effortLimits());
     uhaptics::Mat2 home_fme;
     Model::Jacobian J;
-    model.jacobian(model.home(), J);
+    model.jacobian(model.homeJoints(), J);
     if (!uhaptics::fme::weightedFme<2, 4>(J, inv_limits_sq, home_fme)) throw uhaptics::Error("RHI singular at home");
     const double axis_scale = 0.3 * r / std::sqrt(Eigen::SelfAdjointEigenSolver<uhaptics::Mat2>(home_fme).eigenvalues()(1));
     std::array<cShapeLine*, 4> links{};
@@ -109,7 +109,7 @@ int main(int argc, char** argv) {
       link->m_colorPointB.setGrayDim();
     }
     uhaptics::Vec2 home_tip;
-    model.forward(model.home(), home_tip);
+    model.forward(model.homeJoints(), home_tip);
 
     if (!tool->start()) {
       std::fprintf(stderr, "uhaptics-scene-rhi: the device did not open\n");

@@ -45,11 +45,11 @@ cPlanarLinkageDevice<N>::cPlanarLinkageDevice(unsigned int a_deviceNumber, const
       m_model(std::make_unique<const Model>(std::move(a_model))) {
   const Model& model = *m_model;
   try {
-    m_controller = std::make_unique<Controller>(model, model.torqueLimits(), model.home(), optionsFrom<N>(a_selection));
+    m_controller = std::make_unique<Controller>(model, model.effortLimits(), model.homeJoints(), optionsFrom<N>(a_selection));
   } catch (const uhaptics::Error& e) {
     throw uhaptics::Error("device " + a_selection.device + " (options/" + a_selection.device + "/...): " + e.what());
   }
-  model.forward(model.home(), m_centre);
+  model.forward(model.homeJoints(), m_centre);
   using Kind = uhaptics::RendererFigure::Kind;
   m_figureFreeToStiff = sessionStats().declareFigure("free_to_stiff", Kind::kCount);
   m_figureStiffToFree = sessionStats().declareFigure("stiff_to_free", Kind::kCount);
@@ -61,8 +61,8 @@ cPlanarLinkageDevice<N>::cPlanarLinkageDevice(unsigned int a_deviceNumber, const
   // ellipse sum (tau_i / T_i)^2 <= 1 allow |F| = 1 / sqrt(u^T J W^2 J^T u) along u; the minimum
   // over u (inside the actual box of limits, so conservative).
   typename Model::Jacobian J;
-  model.jacobian(model.home(), J);
-  const typename Model::JointVector w = model.torqueLimits().cwiseInverse();
+  model.jacobian(model.homeJoints(), J);
+  const typename Model::JointVector w = model.effortLimits().cwiseInverse();
   const uhaptics::Mat2 JWWJt = J * w.cwiseAbs2().asDiagonal() * J.transpose();
   const double lambda_max = Eigen::SelfAdjointEigenSolver<uhaptics::Mat2>(JWWJt, Eigen::EigenvaluesOnly).eigenvalues()(1);
 
@@ -71,7 +71,7 @@ cPlanarLinkageDevice<N>::cPlanarLinkageDevice(unsigned int a_deviceNumber, const
   m_specifications.m_maxLinearStiffness = 1000.0;  // paper 003's stiff environment K_e
   m_specifications.m_maxLinearDamping = 5.0;       // assumed: well inside 1 kHz stability for these masses
   m_specifications.m_workspaceRadius = a_selection.option("workspace_radius", a_workspaceRadius, 0.01, 0.3);
-  m_q = model.home();
+  m_q = model.homeJoints();
   updateState();
 }
 

@@ -49,7 +49,7 @@ Fig4Result runFig4(const ExoFingerModel& model, const Fig4Options& o) {
   UnderactuatedGains<ExoFingerModel> gains;
   gains.Zx = r.zx * Mat2::Identity();
   gains.Zq(0, 0) = o.zq;
-  gains.force_limit = model.forceLimit();
+  gains.force_limit = model.effortLimits();
   StandardRenderer<ExoFingerModel> standard(model, gains);
   NullSpaceRenderer<ExoFingerModel> nullspace(model, gains);
   LinearizedSubspaceRenderer<ExoFingerModel> linearized(model, gains);

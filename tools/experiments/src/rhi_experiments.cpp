@@ -38,7 +38,7 @@ fme::SelfMotionOptions matchingOptions() {
 // Starts for the offline matching: home and the four configurations that turn the first motor or
 // the PHANTOM mount by +-45 deg with both internal angles kept at 90 deg (all inside the limits).
 std::array<Vec4, 5> limitSeeds(const Rhi4Model& model) {
-  const Vec4 h = model.home();
+  const Vec4 h = model.homeJoints();
   const double a = M_PI / 4;
   return {h, h + Vec4(a, a, 0, 0), h + Vec4(-a, -a, 0, 0), h + Vec4(0, 0, a, a), h + Vec4(0, 0, -a, -a)};
 }
@@ -49,9 +49,9 @@ constexpr int kMatchingGrid = 36;
 constexpr std::size_t kGridStarts = 8;
 }  // namespace
 
-Rhi4Model loadRhi4(const std::string& params_dir) { return Rhi4Model::fromFile(params_dir + "/rhi4.json", "rhi4"); }
+Rhi4Model loadRhi4(const std::string& params_dir) { return Rhi4Model::load(params_dir + "/rhi4.json", "rhi4"); }
 Planar3Model loadPlanar3(const std::string& params_dir) {
-  return Planar3Model::fromFile(params_dir + "/planar3.json", "planar3");
+  return Planar3Model::load(params_dir + "/planar3.json", "planar3");
 }
 
 namespace {
@@ -69,7 +69,7 @@ void forEachSelfMotionGridPoint(const Rhi4Model& model, const Vec2& x, int per_a
       const Vec2 leading(-M_PI + 2.0 * M_PI * i / per_axis, -M_PI + 2.0 * M_PI * j / per_axis);
       const int count = model.closeLastTwoLinks(x, leading, solutions);
       for (int branch = 0; branch < count; ++branch) {
-        model.nearestEquivalent(solutions[static_cast<std::size_t>(branch)], model.home(), q);
+        model.nearestEquivalent(solutions[static_cast<std::size_t>(branch)], model.homeJoints(), q);
         if (limits.contains(q)) f(i, j, branch, q);
       }
     }
@@ -78,7 +78,7 @@ void forEachSelfMotionGridPoint(const Rhi4Model& model, const Vec2& x, int per_a
 double matchingCost(const Rhi4Model& model, const Vec4& q, const Mat2& target) {
   const fme::SelfMotionOptions opt = matchingOptions();
   double nu = 0.0;
-  if (!fme::fmeCostValue(model, q, fme::inverseSquaredLimits(model.torqueLimits()), target, nu)) return kNaN;
+  if (!fme::fmeCostValue(model, q, fme::inverseSquaredLimits(model.effortLimits()), target, nu)) return kNaN;
   return nu + opt.limit_weight * jointLimitPotential(model.jointLimits(), q, opt.limit_margin);
 }
 }  // namespace
@@ -86,7 +86,7 @@ double matchingCost(const Rhi4Model& model, const Vec4& q, const Mat2& target) {
 bool matchedConfiguration(const Rhi4Model& model, const Vec2& x, const Mat2& target, Vec4& q_best) {
   const fme::SelfMotionOptions opt = matchingOptions();
   const JointLimits<4>& joint_limits = model.jointLimits();
-  const Vec4 w2 = fme::inverseSquaredLimits(model.torqueLimits());
+  const Vec4 w2 = fme::inverseSquaredLimits(model.effortLimits());
   // Starts: the fixed seeds, then every local minimum of the cost on a coarse grid of the
   // self-motion manifold (10 deg in the first two link angles, per elbow branch, 8 neighbours with
   // wrap-around), lowest first, so that every basin wider than the grid gets a descent.
@@ -134,9 +134,9 @@ bool matchedConfiguration(const Rhi4Model& model, const Vec2& x, const Mat2& tar
 // ---- 3-DoF example ---------------------------------------------------------------------------
 ExampleResult runExample3(const Planar3Model& model, double duration, double dt) {
   ExampleResult r;
-  const Vec3 limits = model.torqueLimits();
+  const Vec3 limits = model.effortLimits();
   const Vec3 w2 = fme::inverseSquaredLimits(limits);
-  const Vec3 q0 = model.home();
+  const Vec3 q0 = model.homeJoints();
   model.forward(q0, r.x_end);
   Mat<2, 3> J;
   model.jacobian(q0, J);
@@ -186,7 +186,7 @@ ExampleResult runExample3(const Planar3Model& model, double duration, double dt)
 
 // ---- closed loop -------------------------------------------------------------------------------
 ClosedLoop::ClosedLoop(const Rhi4Model& model, const Rhi4Controller::Options& options, const PalpationSetup& setup)
-    : setup_(setup), sim_(model, setup.substep), ctrl_(model, model.torqueLimits(), model.home(), options) {}
+    : setup_(setup), sim_(model, setup.substep), ctrl_(model, model.effortLimits(), model.homeJoints(), options) {}
 
 EndEffectorLoad ClosedLoop::handAt(const Vec2& anchor) const {
   EndEffectorLoad load;
@@ -268,7 +268,7 @@ PalpationCase runPalpation(const Rhi4Model& model, FmeEllipsoidMode mode, const 
   PalpationCase pc;
   pc.name = mode == FmeEllipsoidMode::kStiff ? "stiff" : "free";
   const auto options = paperOptions(mode, setup.u);
-  const Vec4 limits = model.torqueLimits();
+  const Vec4 limits = model.effortLimits();
 
   // 1. Reconfigure at x0, then push into the wall with the hand: anchor ramps 3 cm along u.
   pc.limit_distance = INFINITY;
@@ -418,7 +418,7 @@ bool globalMatch(const Rhi4Model& model, const Vec2& x, const Mat2& target, Vec4
   if (!std::isfinite(cost)) return false;
   const fme::SelfMotionOptions opt = matchingOptions();
   Vec4 q = q_best;
-  const auto r = fme::optimizeSelfMotion(model, q, x, fme::inverseSquaredLimits(model.torqueLimits()), target, opt,
+  const auto r = fme::optimizeSelfMotion(model, q, x, fme::inverseSquaredLimits(model.effortLimits()), target, opt,
                                          &model.jointLimits());
   const double refined = r.nu + opt.limit_weight * r.limit_potential;
   if (r.valid && r.position_error <= 1e-9 && model.jointLimits().contains(q) && refined < cost) {
@@ -441,10 +441,10 @@ std::vector<WorkspacePoint> workspaceRatioMap(const Rhi4Model& model, double ste
         points.push_back(
             {base + d, kNaN, kNaN, kNaN, RatioKind::kUnreachable, kNaN, kNaN, kNaN, kNaN, kNaN, -1, -1, false});
     }
-  const Vec4 limits = model.torqueLimits();
+  const Vec4 limits = model.effortLimits();
   const Vec4 w2 = fme::inverseSquaredLimits(limits);
   Mat<2, 4> J;
-  model.jacobian(model.home(), J);
+  model.jacobian(model.homeJoints(), J);
   Mat2 fme0;
   fme::weightedFme(J, w2, fme0);
   const auto scales = fme::ellipsoidScales(fme0, 5.0);
@@ -569,7 +569,7 @@ TransitionRun runTransition(const Rhi4Model& model, bool smooth, const Palpation
 
 // ---- all studies, their checks and summary -----------------------------------------------------------
 HomeScales homeScales(const Rhi4Model& model) {
-  const Rhi4Controller controller(model, model.torqueLimits(), model.home());
+  const Rhi4Controller controller(model, model.effortLimits(), model.homeJoints());
   return {controller.majorAxis(), controller.minorAxis()};
 }
 

@@ -20,7 +20,7 @@ DeviceDefinition definition() {
     const ExoFingerModel model = ExoFingerModel::fromParams(file);
     requireSameRate(file, "usb/servo_rate_hz", spec.servo_rate_hz, model.hostRateHz());
     requireSameRate(file, "usb/sample_rate_hz", spec.sample_rate_hz, model.boardRateHz());
-    const double limit = model.forceLimit()(0);
+    const double limit = model.effortLimits()(0);
     spec.descriptor = DeviceDescriptor::fromParams(file, wire::DeviceType{self.wire_code}, self.title,
                                                    ExoFingerModel::kJoints, ExoFingerModel::kActuated, &limit);
   };

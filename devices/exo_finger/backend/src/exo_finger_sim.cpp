@@ -229,7 +229,7 @@ void ExoFingerSim::command(const ExoFingerModel::ActuatorVector& force) noexcept
     return;
   }
   state_.fault = Fault::kNone;
-  const double limit = model_.forceLimit()(0);
+  const double limit = model_.effortLimits()(0);
   commanded_ = std::clamp(force(0), -limit, limit);
 }
 
@@ -246,7 +246,7 @@ void ExoFingerSim::sense() noexcept {
   ExoFingerModel::JointVector q;
   const ExoFingerModel::TaskVector x = trajectory_.at(state_.time);
   model_.inverse(x, q);
-  update(model_, q, data_);
+  model_.forward(q, data_);
   state_.q = q;
   if (!data_.in_range) state_.fault = Fault::kOutOfRange;
   // Virtual work: tau_finger . dx = F dl_x with dq = J^-1 dx  =>  tau_finger = J^-T S^T F.

@@ -18,7 +18,7 @@ constexpr double kContactThreshold = 0.05;
 
 cExoFingerDevice::cExoFingerDevice(unsigned int a_deviceNumber, const uhaptics::DeviceSelection& a_selection)
     : cUhapticsDevice(a_deviceNumber, a_selection, 1.0 / 500.0, Model::kJoints, Model::kActuated),
-      m_model(std::make_unique<Model>(Model::load(Model::defaultParamsPath(paramsDirectory())))),
+      m_model(std::make_unique<Model>(Model::load(paramsDirectory() + "/exo_finger.json"))),
       m_couplingStiffness(a_selection.option("coupling_stiffness", 1.0, 1e-3, 100.0)) {
   const Model& model = *m_model;
   // Survey the working range: fingertip extent (workspace), actuator lever |d x / d l_x| (for Z_q)
@@ -53,7 +53,7 @@ cExoFingerDevice::cExoFingerDevice(unsigned int a_deviceNumber, const uhaptics::
 
   setCommonSpecifications("finger exoskeleton module", false);
   // Virtual work: F_tip |d tip| = F_act |d l_x|, on average over the working range.
-  m_specifications.m_maxLinearForce = model.forceLimit()(0) / tip_per_length;
+  m_specifications.m_maxLinearForce = model.effortLimits()(0) / tip_per_length;
   // What an application may ask of the proxy: the coupling stiffness seen at the fingertip.
   m_specifications.m_maxLinearStiffness = m_couplingStiffness / tip_lever_sq;
   m_specifications.m_maxLinearDamping = 0.0;  // a position-driven finger: nothing to damp
@@ -63,7 +63,7 @@ cExoFingerDevice::cExoFingerDevice(unsigned int a_deviceNumber, const uhaptics::
   uhaptics::UnderactuatedGains<Model> gains;
   gains.Zx = m_couplingStiffness * uhaptics::Mat2::Identity();
   gains.Zq = Model::ActuatorVector::Constant(m_couplingStiffness * lever_sq).asDiagonal();  // Z_x seen at l_x
-  gains.force_limit = model.forceLimit();
+  gains.force_limit = model.effortLimits();
   m_renderer = std::make_unique<Renderer>(model, gains);
 
   using Kind = uhaptics::RendererFigure::Kind;
@@ -131,7 +131,7 @@ void cExoFingerDevice::endSession() noexcept {
 }
 
 void cExoFingerDevice::sense(const JointReading& a_reading) noexcept {
-  uhaptics::update(*m_model, Eigen::Map<const Model::JointVector>(a_reading.positions), m_data);
+  m_model->forward(Eigen::Map<const Model::JointVector>(a_reading.positions), m_data);
   updateState(a_reading.first ? 0.0 : getServoPeriod());
 }
 

@@ -27,8 +27,6 @@ double wrapNear(double angle, double centre) noexcept {
 }
 }  // namespace
 
-std::string ExoFingerModel::defaultParamsPath(const std::string& params_dir) { return params_dir + "/exo_finger.json"; }
-
 ExoFingerModel ExoFingerModel::load(const std::string& path) { return fromParams(ParamFile::load(path)); }
 
 ExoFingerModel ExoFingerModel::fromParams(const ParamFile& p) {
@@ -61,7 +59,7 @@ ExoFingerModel ExoFingerModel::fromParams(const ParamFile& p) {
 
   const double retracted = p.number("actuator/retracted_length", 0.01, 0.5);
   const double stroke = p.number("actuator/stroke", 0.001, 0.3);
-  m.force_limit_(0) = p.number("actuator/force_limit", 0.1, 1000.0);
+  m.effort_limits_(0) = p.number("actuator/force_limit", 0.1, 1000.0);
   m.backlash_ = p.numberOr("actuator/backlash", 0.0, 0.0, 0.01);
   m.board_rate_hz_ = p.number("rates/board_rate_hz", 1.0, 100000.0);
   m.host_rate_hz_ = p.number("rates/host_rate_hz", 1.0, 100000.0);
@@ -82,8 +80,8 @@ ExoFingerModel ExoFingerModel::fromParams(const ParamFile& p) {
 
   // The design must assemble, round-trip, stay inside the stroke and keep a nonsingular Jacobian
   // over the whole working range; a coarse grid here (tests use a dense one).
-  m.joint_lower_ << retracted, 1e300;
-  m.joint_upper_ << retracted + stroke, -1e300;
+  m.joint_limits_.lower << retracted, 1e300;
+  m.joint_limits_.upper << retracted + stroke, -1e300;
   constexpr int kGrid = 41;
   double det_sign = 0.0;
   for (int i = 0; i < kGrid; ++i) {
@@ -112,8 +110,8 @@ ExoFingerModel ExoFingerModel::fromParams(const ParamFile& p) {
       if (!std::isfinite(det) || det == 0.0 || (det_sign != 0.0 && det * det_sign <= 0.0))
         p.fail("the linkage's Jacobian is singular " + where.str() + "; check 'linkage/*'");
       det_sign = det > 0.0 ? 1.0 : -1.0;
-      m.joint_lower_(1) = std::min(m.joint_lower_(1), q(1));
-      m.joint_upper_(1) = std::max(m.joint_upper_(1), q(1));
+      m.joint_limits_.lower(1) = std::min(m.joint_limits_.lower(1), q(1));
+      m.joint_limits_.upper(1) = std::max(m.joint_limits_.upper(1), q(1));
     }
   }
   return m;
@@ -215,20 +213,20 @@ bool ExoFingerModel::taskInRange(const TaskVector& x, double tol) const noexcept
 bool ExoFingerModel::inWorkingRange(const JointVector& q, double tol) const noexcept {
   // Both joints: the rocker too, since outside its range the four-bar can map q_B to an in-range
   // PIP angle on another branch (a reading that is no configuration of this finger).
-  if (!q.allFinite() || (q.array() < joint_lower_.array() - tol).any() ||
-      (q.array() > joint_upper_.array() + tol).any())
+  if (!q.allFinite() || (q.array() < joint_limits_.lower.array() - tol).any() ||
+      (q.array() > joint_limits_.upper.array() + tol).any())
     return false;
   TaskVector x;
   forward(q, x);
   return taskInRange(x, tol);
 }
 
-void update(const ExoFingerModel& model, const ExoFingerModel::JointVector& q, ExoFingerData& data) noexcept {
+void ExoFingerModel::forward(const JointVector& q, ExoFingerData& data) const noexcept {
   data.q = q;
-  model.forward(q, data.x);
-  model.jacobian(q, data.J);
-  model.points(data.x, data.points);
-  data.in_range = model.inWorkingRange(q);
+  forward(q, data.x);
+  jacobian(q, data.J);
+  points(data.x, data.points);
+  data.in_range = inWorkingRange(q);
 }
 
 }  // namespace uhaptics

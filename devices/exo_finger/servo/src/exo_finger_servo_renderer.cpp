@@ -29,7 +29,7 @@ class ExoServoRenderer final : public DeviceServoRenderer {
     // 400 N/m on the actuator stroke: about 10 N at a quarter of the 50 mm stroke from the proxy,
     // well inside the 50 N limit over the flexion cycle, so the safety stage has nothing to do.
     g.Zq(0, 0) = 400.0;
-    g.force_limit = model.forceLimit();
+    g.force_limit = model.effortLimits();
     return g;
   }
   std::unique_ptr<const ExoFingerModel> model_;

@@ -13,7 +13,7 @@ namespace chai3d {
 // Assumed: a 5 cm disc around home; the end effector starts 0.2 m from the base, the reach is 0.75 m.
 cPlanarArmDevice::cPlanarArmDevice(unsigned int a_deviceNumber, const uhaptics::DeviceSelection& a_selection)
     : cPlanarLinkageDevice<3>(a_deviceNumber, a_selection,
-                              Model::fromFile(paramsDirectory() + "/" + uhaptics::devices::planar3::definition().params_file, "planar3"),
+                              Model::load(paramsDirectory() + "/" + uhaptics::devices::planar3::definition().params_file, "planar3"),
                               "3-DoF planar arm", 0.05) {}
 
 }  // namespace chai3d

@@ -5,7 +5,7 @@
 namespace uhaptics::devices::planar3 {
 
 std::unique_ptr<DeviceServoRenderer> makeServoRenderer(const std::string& params_path) {
-  return std::make_unique<PlanarFmeServoRenderer<3>>(Planar3Model::fromFile(params_path, "planar3"));
+  return std::make_unique<PlanarFmeServoRenderer<3>>(Planar3Model::load(params_path, "planar3"));
 }
 
 }  // namespace uhaptics::devices::planar3

@@ -13,7 +13,7 @@ namespace chai3d {
 // Assumed: a 10 cm disc around home keeps the arm far from its 0.786 m reach.
 cRedundantPlanarDevice::cRedundantPlanarDevice(unsigned int a_deviceNumber, const uhaptics::DeviceSelection& a_selection)
     : cPlanarLinkageDevice<4>(a_deviceNumber, a_selection,
-                              Model::fromFile(paramsDirectory() + "/" + uhaptics::devices::rhi::definition().params_file, "rhi4"),
+                              Model::load(paramsDirectory() + "/" + uhaptics::devices::rhi::definition().params_file, "rhi4"),
                               "4-DoF planar redundant interface", 0.1) {}
 
 }  // namespace chai3d

@@ -5,7 +5,7 @@
 namespace uhaptics::devices::rhi {
 
 std::unique_ptr<DeviceServoRenderer> makeServoRenderer(const std::string& params_path) {
-  return std::make_unique<PlanarFmeServoRenderer<4>>(Rhi4Model::fromFile(params_path, "rhi4"));
+  return std::make_unique<PlanarFmeServoRenderer<4>>(Rhi4Model::load(params_path, "rhi4"));
 }
 
 }  // namespace uhaptics::devices::rhi

@@ -65,7 +65,7 @@ Fault SimulatedTau::step(const Vec6& tau_command, const Vec3& external_force) no
   if (options_.max_delay_samples > 0)
     delay = std::uniform_int_distribution<std::size_t>(0, static_cast<std::size_t>(options_.max_delay_samples))(rng_);
   applied_ = command_history_[(history_head_ + command_history_.size() - delay) % command_history_.size()];
-  clampSymmetric(applied_, model_.torqueLimit());  // motor saturation
+  clampSymmetric(applied_, model_.effortLimits());  // motor saturation
 
   // data_ holds the forward kinematics at q_ from reset()/the previous step.
   Fault f = model_.computeDynamicsTerms(q_, qd_, data_);

@@ -19,7 +19,7 @@ DeviceDefinition definition() {
   d.describe_board = [](const DeviceDefinition& self, const ParamFile& file, BoardSpec& spec) {
     const TauModel model = TauModel::fromParams(file);
     requireSameRate(file, "usb/servo_rate_hz", spec.servo_rate_hz, 1.0 / model.servoPeriod());
-    const Vec6 limits = model.torqueLimit();
+    const Vec6 limits = model.effortLimits();
     spec.descriptor = DeviceDescriptor::fromParams(file, wire::DeviceType{self.wire_code}, self.title, 6, 6, limits.data());
   };
   d.make_plant = [](const std::string& path) -> std::unique_ptr<BoardPlant> {

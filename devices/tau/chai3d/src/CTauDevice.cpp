@@ -70,10 +70,10 @@ cTauDevice::cTauDevice(unsigned int a_deviceNumber, const uhaptics::DeviceSelect
         const uhaptics::Vec3 u = uhaptics::Vec3(i, j, k).normalized();
         uhaptics::Vec6 w = uhaptics::Vec6::Zero();
         w.head<3>() = u;
-        force = std::min(force, (model.torqueLimit().array() / (J.transpose() * w).array().abs()).minCoeff());
+        force = std::min(force, (model.effortLimits().array() / (J.transpose() * w).array().abs()).minCoeff());
         w.head<3>().setZero();
         w.tail<3>() = u;
-        torque = std::min(torque, (model.torqueLimit().array() / (J.transpose() * w).array().abs()).minCoeff());
+        torque = std::min(torque, (model.effortLimits().array() / (J.transpose() * w).array().abs()).minCoeff());
       }
 
   setCommonSpecifications("TAU-class 6-DoF parallel device", true);
@@ -256,13 +256,13 @@ uhaptics::Fault cTauDevice::render(const ServoInput& a_input, double* a_efforts)
         // corner, friction, a mesh's facets): rendered as sent, by the spring.
         const uhaptics::Vec3 across = a_input.force - surface.normal.dot(a_input.force) * surface.normal;
         m_tau.noalias() += m_data->J.topRows<3>().transpose() * across;
-        uhaptics::clampSymmetric(m_tau, model.torqueLimit());
+        uhaptics::clampSymmetric(m_tau, model.effortLimits());
       }
     } else {
       uhaptics::Vec6 wrench;
       wrench << a_input.force, a_input.torque;
       m_tau.noalias() += m_data->J.transpose() * wrench;  // the application's spring (the baseline)
-      uhaptics::scaleIntoBox(m_tau, model.torqueLimit());
+      uhaptics::scaleIntoBox(m_tau, model.effortLimits());
     }
   }
   if (fault != uhaptics::Fault::kNone || !m_tau.allFinite()) {

@@ -35,7 +35,7 @@ Fault solvePose(const TauKinematics& kin, const Vec6& q, double tol, int max_ite
 TauModel TauModel::load(const std::string& path) { return fromParams(ParamFile::load(path)); }
 
 TauModel TauModel::fromParams(const ParamFile& p) {
-  p.requireFormat("tau", 1);
+  p.requireFormat(kDeviceName, kFormatVersion);
   TauModel m;
   m.kinematics_ = RusLegKinematics::fromParams(p);
   m.torque_limit_ = p.vector<6>("limits/joint_torque", 1e-3, 100.0);

@@ -56,7 +56,7 @@ const WallCommand& LqrWallRenderer::tick(const Vec6& q, const SurfaceContact& co
   cmd_.penetration = cmd_.in_contact ? std::max(0.0, -distance) : 0.0;
   if (!cmd_.in_contact) {  // free space: no IK, no LQR
     regulator_.clearIntegral();
-    scaleIntoBox(cmd_.torque, front_.model().torqueLimit());
+    scaleIntoBox(cmd_.torque, front_.model().effortLimits());
     regulator_.applied(cmd_.torque);
     return cmd_;
   }
@@ -103,12 +103,12 @@ const WallCommand& LqrWallRenderer::tick(const Vec6& q, const SurfaceContact& co
       cmd_.in_contact = false;
       cmd_.penetration = 0.0;
       regulator_.clearIntegral();
-      scaleIntoBox(cmd_.torque, front_.model().torqueLimit());
+      scaleIntoBox(cmd_.torque, front_.model().effortLimits());
       regulator_.applied(cmd_.torque);
       return cmd_;
     }
   }
-  const Vec6& limit = front_.model().torqueLimit();
+  const Vec6& limit = front_.model().effortLimits();
   if (options_.keep_direction) {
     // The largest share s <= 1 of the contact torque with |gravity_i + s contact_i| <= limit_i.
     double share = 1.0;

@@ -38,7 +38,7 @@ const WallCommand& SpringWallRenderer::tick(const Vec6& q, const SurfaceContact&
     const double force = std::max(0.0, options_.stiffness * cmd_.penetration - options_.damping * normal_speed);
     cmd_.torque.noalias() += data.J.topRows<3>().transpose() * (force * n);
   }
-  cmd_.saturated = scaleIntoBox(cmd_.torque, front_.model().torqueLimit()) < 1.0;
+  cmd_.saturated = scaleIntoBox(cmd_.torque, front_.model().effortLimits()) < 1.0;
   if (zeroIfNonFinite(cmd_.torque) != Fault::kNone) {
     cmd_ = WallCommand{};
     cmd_.fault = Fault::kNonFiniteResult;

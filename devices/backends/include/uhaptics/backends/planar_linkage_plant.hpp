@@ -66,13 +66,13 @@ class PlanarLinkagePlant final : public HeldTorquePlant<N> {
 ///   d.make_plant = &makePlanarLinkagePlant<4, kModel>;
 template <int N, const char* kModel>
 void describePlanarLinkageBoard(const DeviceDefinition& self, const ParamFile& file, BoardSpec& spec) {
-  const PlanarLinkageModel<N> model = PlanarLinkageModel<N>::fromFile(spec.params_path, kModel);
-  const Vec<N> limits = model.torqueLimits();
+  const PlanarLinkageModel<N> model = PlanarLinkageModel<N>::load(spec.params_path, kModel);
+  const Vec<N> limits = model.effortLimits();
   spec.descriptor = DeviceDescriptor::fromParams(file, wire::DeviceType{self.wire_code}, self.title, N, N, limits.data());
 }
 template <int N, const char* kModel>
 std::unique_ptr<BoardPlant> makePlanarLinkagePlant(const std::string& params_path) {
-  return std::make_unique<PlanarLinkagePlant<N>>(PlanarLinkageModel<N>::fromFile(params_path, kModel),
+  return std::make_unique<PlanarLinkagePlant<N>>(PlanarLinkageModel<N>::load(params_path, kModel),
                                                  typename PlanarLinkagePlant<N>::Options{});
 }
 

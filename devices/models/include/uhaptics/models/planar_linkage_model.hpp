@@ -21,7 +21,9 @@
 // with Jc_i the Jacobian of centre of mass i and w_il = d_l (l < i), d_i / 2 (l = i).
 // The model is immutable (loaded once from a versioned JSON file); every method is const, noexcept
 // and allocation-free, so it satisfies the kinematic-model interface and the optional
-// capabilities of model_capabilities.hpp (Jacobian derivative, mass matrix).
+// capabilities of model_capabilities.hpp (Jacobian derivative, mass matrix, joint limits). It has
+// no Data workspace: forward(), jacobian() and the dynamics write into the caller's vectors
+// (docs/adding-a-device.md, "The model").
 #include <array>
 #include <cmath>
 #include <string>
@@ -31,6 +33,8 @@
 #include "uhaptics/core/types.hpp"
 
 namespace uhaptics {
+
+class ParamFile;
 
 template <int N>
 struct PlanarLinkageParameters {
@@ -62,12 +66,15 @@ class PlanarLinkageModel {
   using Selection = Mat<N, N>;
   using MassMatrix = Mat<N, N>;
   using Parameters = PlanarLinkageParameters<N>;
+  static constexpr int kFormatVersion = 1;
 
   /// Validates p; throws uhaptics::Error naming the offending field.
   explicit PlanarLinkageModel(Parameters p);
-  /// Loads devices/params/<device>.json (format "planar_linkage" version 1) and checks that the
-  /// file describes `device` with N joints.
-  static PlanarLinkageModel fromFile(const std::string& path, const std::string& device);
+  /// Loads and validates a parameter file (devices/params/<device>.json, format version 1) and
+  /// checks that it describes `device` with N joints; throws uhaptics::Error naming the file and
+  /// field. One class serves several devices, so the device name is an argument, not a constant.
+  static PlanarLinkageModel load(const std::string& path, const std::string& device);
+  static PlanarLinkageModel fromParams(const ParamFile& params, const std::string& device);
 
   void forward(const JointVector& q, TaskVector& x) const noexcept;
   void jacobian(const JointVector& q, Jacobian& J) const noexcept;
@@ -100,9 +107,12 @@ class PlanarLinkageModel {
 
   const Selection& selection() const noexcept { return selection_; }
   const Parameters& parameters() const noexcept { return p_; }
-  const JointVector& torqueLimits() const noexcept { return p_.torque_limit; }
-  const JointVector& home() const noexcept { return p_.home; }
+  /// Configuration at power-on [rad].
+  const JointVector& homeJoints() const noexcept { return p_.home; }
+  /// Mechanical range, lower <= C q <= upper (no finite bound when the file gives none).
   const JointLimits<N>& jointLimits() const noexcept { return p_.joint_limits; }
+  /// The actuators' torque limits, |tau_i| <= T_i [N m].
+  const JointVector& effortLimits() const noexcept { return p_.torque_limit; }
   /// Sum of link lengths: the radius of the reachable disc around the base.
   double reach() const noexcept { return p_.link_length.sum(); }
 

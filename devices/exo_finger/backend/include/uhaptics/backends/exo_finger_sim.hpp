@@ -100,7 +100,7 @@ class ExoFingerSim {
   double period_;
   double commanded_ = 0.0;
   ExoFingerState state_;
-  ExoFingerData data_;
+  ExoFingerData data_{model_};
 };
 
 }  // namespace uhaptics

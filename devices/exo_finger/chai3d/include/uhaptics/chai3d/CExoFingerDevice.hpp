@@ -88,7 +88,7 @@ class cExoFingerDevice : public cUhapticsDevice {
   std::unique_ptr<const Model> m_model;  // the renderer keeps a reference to it
   const uhaptics::ExoFingerBoardPlant* m_plant = nullptr;  // sim backend: the simulated finger (getFingerTorque)
   std::unique_ptr<Renderer> m_renderer;
-  uhaptics::ExoFingerData m_data;
+  uhaptics::ExoFingerData m_data{*m_model};
   double m_couplingStiffness;                       // Z_x (scalar), N m/rad
   uhaptics::Vec2 m_centre = uhaptics::Vec2::Zero();  // fingertip workspace centre, hand frame
   Model::ActuatorVector m_actuator = Model::ActuatorVector::Zero();

@@ -13,16 +13,19 @@
 // construction; the loader checks that the chosen assembly modes round-trip over the whole
 // working range and that the Jacobian stays nonsingular there (tests repeat this on a dense grid).
 //
-// Model/Data split: ExoFingerModel is immutable after load() and satisfies KinematicModel;
-// ExoFingerData is a caller-owned workspace filled by update() without allocating.
+// Model/Data split (docs/adding-a-device.md, "The model"): ExoFingerModel is immutable after load()
+// and satisfies KinematicModel; ExoFingerData, made from the model, is a caller-owned workspace that
+// forward(q, data) fills without allocating.
 #include <string>
 
+#include "uhaptics/core/joint_limits.hpp"
 #include "uhaptics/core/kinematic_model.hpp"
 #include "uhaptics/core/types.hpp"
 
 namespace uhaptics {
 
 class ParamFile;
+struct ExoFingerData;
 
 struct ExoFingerGeometry {
   double proximal_length = 0.0;  // m
@@ -59,17 +62,18 @@ class ExoFingerModel {
   static constexpr const char* kDeviceName = "exo_finger";
   static constexpr int kFormatVersion = 1;
 
-  /// Loads and validates a parameter file; throws uhaptics::Error naming the file and field.
+  /// Loads and validates a parameter file (devices/params/exo_finger.json); throws uhaptics::Error
+  /// naming the file and field.
   static ExoFingerModel load(const std::string& path);
   static ExoFingerModel fromParams(const ParamFile& params);
-  /// The file shipped in devices/params (UHAPTICS_PARAMS_DIR at build time).
-  static std::string defaultParamsPath(const std::string& params_dir);
 
   // KinematicModel interface. Outside the assembly region the closures are continued by clamping
   // (finite, continuous); inWorkingRange() says whether q is a real configuration.
   void forward(const JointVector& q, TaskVector& x) const noexcept;
   void jacobian(const JointVector& q, Jacobian& J) const noexcept;
   const Selection& selection() const noexcept { return selection_; }
+  /// Fills data for state q: forward kinematics, Jacobian, points and range flag. Allocation-free.
+  void forward(const JointVector& q, ExoFingerData& data) const noexcept;
 
   /// Closed-form inverse q = f^-1(x). Returns false if x does not assemble (q then clamped).
   bool inverse(const TaskVector& x, JointVector& q) const noexcept;
@@ -84,10 +88,11 @@ class ExoFingerModel {
   const ExoFingerGeometry& geometry() const noexcept { return geometry_; }
   const TaskVector& taskLower() const noexcept { return task_lower_; }
   const TaskVector& taskUpper() const noexcept { return task_upper_; }
-  /// Actuator length range [retracted, retracted + stroke] (m) and q_B range over the working range.
-  const JointVector& jointLower() const noexcept { return joint_lower_; }
-  const JointVector& jointUpper() const noexcept { return joint_upper_; }
-  const ActuatorVector& forceLimit() const noexcept { return force_limit_; }
+  /// Per-joint stops (identity map): the actuator length range [retracted, retracted + stroke] (m)
+  /// and the q_B range over the working range (rad).
+  const JointLimits<kJoints>& jointLimits() const noexcept { return joint_limits_; }
+  /// The actuator's force limit (N).
+  const ActuatorVector& effortLimits() const noexcept { return effort_limits_; }
   double backlash() const noexcept { return backlash_; }
   double boardRateHz() const noexcept { return board_rate_hz_; }
   double hostRateHz() const noexcept { return host_rate_hz_; }
@@ -107,8 +112,8 @@ class ExoFingerModel {
   ExoFingerGeometry geometry_;
   Selection selection_ = (Selection() << 1.0, 0.0).finished();
   TaskVector task_lower_ = TaskVector::Zero(), task_upper_ = TaskVector::Zero();
-  JointVector joint_lower_ = JointVector::Zero(), joint_upper_ = JointVector::Zero();
-  ActuatorVector force_limit_ = ActuatorVector::Zero();
+  JointLimits<kJoints> joint_limits_;
+  ActuatorVector effort_limits_ = ActuatorVector::Zero();
   double backlash_ = 0.0;
   double board_rate_hz_ = 0.0, host_rate_hz_ = 0.0, force_loop_tau_ = 0.0;
   // Assembly modes (+1 / -1) of the two law-of-cosines closures, fixed at load.
@@ -116,17 +121,16 @@ class ExoFingerModel {
   std::string origin_;
 };
 
-/// Workspace for one device state: everything a tick or a CHAI3D tool reads, filled in place.
+/// Workspace for one device state: everything a tick or a CHAI3D tool reads, filled in place by
+/// ExoFingerModel::forward(q, data).
 struct ExoFingerData {
+  explicit ExoFingerData(const ExoFingerModel& /*model*/) {}
   ExoFingerModel::JointVector q = ExoFingerModel::JointVector::Zero();
   ExoFingerModel::TaskVector x = ExoFingerModel::TaskVector::Zero();
   ExoFingerModel::Jacobian J = ExoFingerModel::Jacobian::Zero();
   ExoFingerPoints points;
   bool in_range = false;
 };
-
-/// Fills data for state q (forward kinematics, Jacobian, points, range flag). Allocation-free.
-void update(const ExoFingerModel& model, const ExoFingerModel::JointVector& q, ExoFingerData& data) noexcept;
 
 static_assert(kIsKinematicModel<ExoFingerModel>);
 

@@ -1,6 +1,7 @@
 #pragma once
 // TAU-class 6-DoF parallel haptic device (paper 001): immutable model loaded from
-// devices/params/tau.json + a preallocated TauData workspace (Model/Data split, as in Pinocchio).
+// devices/params/tau.json + a preallocated TauData workspace made from it (Model/Data split, as in
+// Pinocchio; docs/adding-a-device.md, "The model").
 //
 // Dynamics: a lumped-mass model in active-joint coordinates. Each actuated link is a rotor inertia
 // plus a point mass on the link; each rod is split into two point masses (link tip and platform
@@ -32,13 +33,16 @@ class TauModel {
   using TaskVector = Vec6;
   using Jacobian = Mat6;
   using Selection = Mat6;
+  static constexpr const char* kDeviceName = "tau";
+  static constexpr int kFormatVersion = 1;
 
   struct PointMass {
     double mass;
     Vec3 body_point;  // platform frame
   };
 
-  /// Loads and validates a parameter file (format "tau", version 1). Throws uhaptics::Error.
+  /// Loads and validates a parameter file (devices/params/tau.json); throws uhaptics::Error naming
+  /// the file and field.
   static TauModel load(const std::string& path);
   static TauModel fromParams(const ParamFile& params);
   /// Any geometry implementing TauKinematics with the given mass/limit data (for labs with real data).
@@ -74,9 +78,11 @@ class TauModel {
 
   // --- parameters ---------------------------------------------------------------------------
   const TauKinematics& kinematics() const noexcept { return *kinematics_; }
+  /// The home configuration: the platform pose and the joint angles that reach it (inverse(homePose())).
   const Vec6& homePose() const noexcept { return home_pose_; }
   const Vec6& homeJoints() const noexcept { return home_q_; }
-  const Vec6& torqueLimit() const noexcept { return torque_limit_; }
+  /// The motors' torque limits [N m].
+  const Vec6& effortLimits() const noexcept { return torque_limit_; }
   int encoderCounts() const noexcept { return encoder_counts_; }
   double encoderResolution() const noexcept;  // rad per count
   double servoPeriod() const noexcept { return servo_period_; }
