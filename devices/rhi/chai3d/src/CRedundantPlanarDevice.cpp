@@ -21,7 +21,8 @@ uhaptics::FmeControllerOptions<2> optionsFrom(const uhaptics::DeviceSelection& s
   o.transition.enter_stiff_below = s.option("eps1", o.transition.enter_stiff_below, 0.0, 1.0);
   o.transition.leave_stiff_at = s.option("eps2", o.transition.leave_stiff_at, 0.0, 1.0);
   o.transition.rho = s.option("rho", o.transition.rho, 0.0, 10.0);
-  // Joint-limit barrier and approach-speed damper (assumed limits, see devices/params/rhi4.json): 0 turns each off.
+  // Joint-limit barrier and approach-speed damper (assumed limits, see devices/rhi/params/rhi4.json):
+  // 0 turns each off.
   o.limit_gain = s.option("limit_gain", o.limit_gain, 0.0, 100.0);
   o.limit_margin = s.option("limit_margin", o.limit_margin, 1e-3, 1.0);
   o.limit_speed = s.option("limit_speed", o.limit_speed, 0.0, 100.0);

@@ -65,7 +65,7 @@ class PlanarLinkageModel {
 
   /// Validates p; throws uhaptics::Error naming the offending field.
   explicit PlanarLinkageModel(Parameters p);
-  /// Loads devices/params/<device>.json (format "planar_linkage" version 1) and checks that the
+  /// Loads a file like rhi4.json (format "planar_linkage" version 1) and checks that the
   /// file describes `device` with N joints.
   static PlanarLinkageModel fromFile(const std::string& path, const std::string& device);
 

@@ -1,6 +1,6 @@
 #pragma once
 // TAU-class 6-DoF parallel haptic device (paper 001): immutable model loaded from
-// devices/params/tau.json + a preallocated TauData workspace (Model/Data split, as in Pinocchio).
+// devices/tau/params/tau.json + a preallocated TauData workspace (Model/Data split, as in Pinocchio).
 //
 // Dynamics: a lumped-mass model in active-joint coordinates. Each actuated link is a rotor inertia
 // plus a point mass on the link; each rod is split into two point masses (link tip and platform
