@@ -8,7 +8,7 @@
 
 namespace uhaptics::test {
 
-/// devices/params/tau.json.
+/// devices/tau/params/tau.json.
 inline const TauModel& tauModel() {
   static const TauModel m = TauModel::load(paramsPath("tau.json"));
   return m;
@@ -20,13 +20,13 @@ inline const ExoFingerModel& exoModel() {
   return m;
 }
 
-/// devices/params/rhi4.json: paper 003's 4-DoF redundant interface.
+/// devices/rhi/params/rhi4.json: paper 003's 4-DoF redundant interface.
 inline const Rhi4Model& rhi4Model() {
   static const Rhi4Model m = Rhi4Model::load(paramsPath("rhi4.json"), "rhi4");
   return m;
 }
 
-/// devices/params/planar3.json: paper 003's 3-DoF example arm.
+/// devices/planar3/params/planar3.json: paper 003's 3-DoF example arm.
 inline const Planar3Model& planar3Model() {
   static const Planar3Model m = Planar3Model::load(paramsPath("planar3.json"), "planar3");
   return m;

@@ -1,16 +1,17 @@
 #pragma once
-// The parameter files the devices ship with (devices/params; tests/CMakeLists.txt passes the folder
-// as UHAPTICS_PARAMS_DIR), and whole-file reads for tests that inspect or edit a file's text.
+// The parameter files the devices ship with (the build's parameter folder, assembled from
+// devices/<folder>/params/; tests/CMakeLists.txt passes it as UHAPTICS_PARAMS_DIR), and whole-file
+// reads for tests that inspect or edit a file's text.
 #include <fstream>
 #include <sstream>
 #include <string>
 
 namespace uhaptics::test {
 
-/// devices/params.
+/// <build>/share/uhaptics/params.
 inline std::string paramsDir() { return UHAPTICS_PARAMS_DIR; }
 
-/// A file in devices/params, e.g. paramsPath("tau.json").
+/// A file in the parameter folder, e.g. paramsPath("tau.json").
 inline std::string paramsPath(const std::string& file) { return paramsDir() + "/" + file; }
 
 /// The whole text of a file ("" when it cannot be read).

@@ -1,5 +1,5 @@
 // Numerical convergence of the simulated TAU (devices/tau/backend/include/uhaptics/backends/simulated_tau.hpp): what
-// devices/params/tau.json claims for "rates/simulation_substeps", checked.
+// devices/tau/params/tau.json claims for "rates/simulation_substeps", checked.
 #include <catch2/catch.hpp>
 #include <nlohmann/json.hpp>
 #include <vector>

@@ -1,11 +1,16 @@
 // The libusb transport without hardware: the real libusb runs discovery in this environment and
 // must say clearly that the device is absent; the advice for the other opening errors is checked
-// as text; descriptors load from a parameter file's "usb" section.
+// as text; descriptors load from a parameter file's "usb" section; the udev rules CMake generates
+// from the parameter files agree with them as the host reads them.
 #include <catch2/catch.hpp>
 
 #include <libusb.h>
 
 #include <cstdio>
+#include <map>
+#include <set>
+#include <sstream>
+#include <vector>
 
 #include "params.hpp"
 #include "uhaptics/backends/board_catalog.hpp"
@@ -29,7 +34,7 @@ DeviceDescriptor tauDescriptor() {
   return d;
 }
 
-const std::string kUdevRule = UHAPTICS_UDEV_RULE;
+const std::string kUdevRules = UHAPTICS_UDEV_RULES;
 
 }  // namespace
 
@@ -58,7 +63,7 @@ TEST_CASE("opening errors come with what to do", "[usb][libusb]") {
   const DeviceDescriptor d = tauDescriptor();
   const std::string access = libusbOpenAdvice(LIBUSB_ERROR_ACCESS, d);
   CHECK(access.find("permission denied") != std::string::npos);
-  CHECK(access.find("devices/udev/99-uhaptics.rules") != std::string::npos);
+  CHECK(access.find("share/uhaptics/udev/99-uhaptics.rules") != std::string::npos);
   CHECK(access.find("udevadm") != std::string::npos);
   const std::string busy = libusbOpenAdvice(LIBUSB_ERROR_BUSY, d);
   CHECK(busy.find("interface 0 of TAU (USB 1209:0002) is busy") != std::string::npos);
@@ -66,18 +71,41 @@ TEST_CASE("opening errors come with what to do", "[usb][libusb]") {
   CHECK(libusbOpenAdvice(LIBUSB_ERROR_IO, d).find("Input/Output") != std::string::npos);
 }
 
-TEST_CASE("the shipped udev rule covers every device's vendor/product id", "[usb][udev]") {
-  const std::string rules = test::readFile(kUdevRule);
+TEST_CASE("the generated udev rules are the registered devices' USB ids, one rule each", "[usb][udev]") {
+  // Rules and the comment line above each.
+  std::istringstream text(test::readFile(kUdevRules));
+  std::vector<std::string> rules;
+  std::map<std::string, std::string> comment_of;
+  std::string line, comment;
+  while (std::getline(text, line)) {
+    if (line.empty()) continue;
+    if (line[0] == '#') {
+      comment = line;
+      continue;
+    }
+    rules.push_back(line);
+    comment_of[line] = comment;
+  }
   REQUIRE_FALSE(rules.empty());
+  // The ids as the host reads them from each registered device's parameter file.
+  std::set<std::string> expected;
   for (const DeviceDefinition* device : deviceDefinitions()) {
     const DeviceDescriptor d = boardSpec(*device, UHAPTICS_PARAMS_DIR).descriptor;
-    char line[96];
-    std::snprintf(line, sizeof line, "ATTRS{idVendor}==\"%04x\", ATTRS{idProduct}==\"%04x\"", d.vendor_id,
-                  d.product_id);
-    INFO(d.name);
-    CHECK(rules.find(line) != std::string::npos);
+    char rule[160];
+    std::snprintf(rule, sizeof rule,
+                  "SUBSYSTEM==\"usb\", ATTRS{idVendor}==\"%04x\", ATTRS{idProduct}==\"%04x\", MODE=\"0660\", "
+                  "GROUP=\"plugdev\", TAG+=\"uaccess\"",
+                  d.vendor_id, d.product_id);
+    INFO(device->name << ": " << rule);
+    expected.insert(rule);
+    REQUIRE(comment_of.count(rule) == 1);
+    const std::string& above = comment_of[rule];  // "# <name>: devices/<folder>/params/<file>"
+    CHECK(above.rfind("# " + device->name + ": devices/", 0) == 0);
+    const std::string file = "/params/" + device->params_file;
+    CHECK((above.size() > file.size() && above.compare(above.size() - file.size(), file.size(), file) == 0));
   }
-  CHECK(rules.find("GROUP=\"plugdev\"") != std::string::npos);
+  CHECK(rules.size() == expected.size());  // no rule twice, none for anything else
+  CHECK(std::set<std::string>(rules.begin(), rules.end()) == expected);
 }
 
 TEST_CASE("descriptor from a parameter file's usb section", "[usb][params]") {

@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Generates the leg geometry of devices/params/tau.json from the documented TAU-class rule.
+"""Generates the leg geometry of devices/tau/params/tau.json from the documented TAU-class rule.
 
 The real TAU geometry is unpublished. Our stand-in: three chains of two R-U-S legs (actuated
 revolute joint at the base, link L1, rod L2 with a universal joint at the link tip and a spherical
@@ -8,8 +8,8 @@ plane; chain 3 sits at 180 deg and is built differently (its own base radius, he
 and platform spread). Each joint axis is horizontal and tangent to its base circle, the link points
 radially inward at q = 0, and the rod length closes the loop at the home pose (the workspace centre).
 
-Usage: tools/scripts/tau_geometry.py [devices/params/tau.json]  (rewrites the "legs" section and
-the matching "source" texts in place; every other entry is kept).
+Usage: tools/scripts/tau_geometry.py [devices/tau/params/tau.json]  (rewrites the "legs" section
+and the matching "source" texts in place; every other entry is kept).
 """
 import json
 import math
@@ -81,7 +81,7 @@ def legs_section(chains_12, chain_3):
 
 
 def main():
-    path = sys.argv[1] if len(sys.argv) > 1 else "devices/params/tau.json"
+    path = sys.argv[1] if len(sys.argv) > 1 else "devices/tau/params/tau.json"
     chains_12, chain_3 = dict(CHAINS_12), dict(CHAIN_3)
     if len(sys.argv) > 2:  # design exploration: JSON overrides {"chains_12": {...}, "chain_3": {...}}
         over = json.loads(sys.argv[2])

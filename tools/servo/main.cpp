@@ -5,7 +5,7 @@
 // {timing_histogram.csv, timing.png, events.txt, summary.txt}; <out>/reproduction.csv has one table.
 //
 //   uhaptics-servo --device all --seconds 2 --out out/servo          # the three emulated boards
-//   uhaptics-servo --device tau --usb --params devices/params/tau.json  # a plugged-in TAU board
+//   uhaptics-servo --device tau --usb --params devices/tau/params/tau.json  # a plugged-in TAU board
 //
 // Emulated boards are driven by the device's renderer (device_servo_renderers.hpp) as an
 // application would. With hardware the renderer is off unless --renderer is given and the commanded

@@ -3,6 +3,7 @@
 #include <unistd.h>
 
 #include <cstdlib>
+#include <filesystem>
 #include <string>
 #include <sys/stat.h>
 
@@ -33,7 +34,10 @@ std::string defaultParamsDirectory() {
   const char* env = std::getenv("UHAPTICS_PARAMS_DIR");
   if (env != nullptr && *env != '\0') return env;
   const std::string folder = programFolder();
-  if (!folder.empty() && isDirectory(folder + "/../share/uhaptics/params")) return folder + "/../share/uhaptics/params";
+  // The program's folder comes resolved from /proc/self/exe (no symbolic links), so dropping ".."
+  // lexically names the same folder.
+  const std::string beside = folder + "/../share/uhaptics/params";
+  if (!folder.empty() && isDirectory(beside)) return std::filesystem::path(beside).lexically_normal().string();
   if (&uhaptics_installed_params_dir != nullptr && uhaptics_installed_params_dir != nullptr)
     return uhaptics_installed_params_dir;
   return UHAPTICS_PARAMS_DIR;

@@ -17,7 +17,9 @@ std::string usbId(std::uint16_t vid, std::uint16_t pid) {
   return text;
 }
 
-constexpr const char* kUdevRule = "devices/udev/99-uhaptics.rules";
+// Generated from the parameter files into the build folder and installed with uhaptics (both under
+// share/uhaptics/udev/).
+constexpr const char* kUdevRules = "share/uhaptics/udev/99-uhaptics.rules";
 
 TransportStatus fromLibusb(int err) noexcept {
   switch (err) {
@@ -73,10 +75,11 @@ std::string libusbOpenAdvice(int err, const DeviceDescriptor& d) {
   const std::string who = d.name + " (USB " + usbId(d.vendor_id, d.product_id) + ")";
   switch (err) {
     case LIBUSB_ERROR_ACCESS:
-      return "permission denied opening " + who + ". Install the udev rule shipped with uhaptics and replug:\n"
-             "  sudo cp " + std::string(kUdevRule) + " /etc/udev/rules.d/ && sudo udevadm control --reload-rules "
-             "&& sudo udevadm trigger\n  (it grants the 'plugdev' group access; add yourself with "
-             "`sudo usermod -aG plugdev $USER` and log in again)";
+      return "permission denied opening " + who + ". Install uhaptics' udev rules and replug:\n"
+             "  sudo cp <uhaptics>/" + std::string(kUdevRules) + " /etc/udev/rules.d/ && sudo udevadm control "
+             "--reload-rules && sudo udevadm trigger\n  (<uhaptics>: its installation prefix or its build folder; "
+             "the rules grant the 'plugdev' group access; add yourself with `sudo usermod -aG plugdev $USER` and "
+             "log in again)";
     case LIBUSB_ERROR_BUSY:
       return "interface " + std::to_string(d.interface_number) + " of " + who +
              " is busy: another program (another uhaptics application?) has claimed it. Close it and retry";

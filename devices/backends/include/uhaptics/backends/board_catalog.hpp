@@ -1,9 +1,9 @@
 #pragma once
 // A device's controller board as the host sees it, from the device's parameter file
-// (devices/params/<file>.json): channel counts and effort limits from the model (through the
-// device's definition) and the link from its "usb" section: vendor/product id (pid.codes' test pair
-// 1209:0001-0003, assumed; devices/udev/99-uhaptics.rules lists the same), interface, endpoints,
-// protocol version, host exchange rate, board sampling rate and board watchdog timeout.
+// (devices/<folder>/params/<file>.json): channel counts and effort limits from the model (through
+// the device's definition) and the link from its "usb" section: vendor/product id (pid.codes' test
+// pair 1209:0001-0003, assumed; the build makes the udev rules from the same ids), interface,
+// endpoints, protocol version, host exchange rate, board sampling rate and board watchdog timeout.
 #include <string>
 
 #include "uhaptics/backends/device_definition.hpp"

@@ -54,7 +54,8 @@ struct DeviceDefinition {
   PaperRef paper;
   /// Its paper's statements about the link.
   PublishedLink published_link;
-  /// Its parameter file in the parameter folder (devices/params).
+  /// Its parameter file's name, e.g. "tau.json": devices/<folder>/params/<file> in the sources, found
+  /// by name in the parameter folder (params_location.hpp).
   std::string params_file;
   /// The board as the host sees it: joint and actuator counts and effort limits from the device's
   /// model, written into spec.descriptor with DeviceDescriptor::fromParams; rates stated twice

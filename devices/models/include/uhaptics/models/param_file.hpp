@@ -1,5 +1,5 @@
 #pragma once
-// Versioned JSON parameter files for device models (devices/params/*.json).
+// Versioned JSON parameter files for device models (devices/<folder>/params/*.json).
 //
 // Every entry is either a bare number or an object that documents it:
 //   "proximal_length": {"value": 0.045, "unit": "m", "source": "assumed: index finger, DESIGN.md"}

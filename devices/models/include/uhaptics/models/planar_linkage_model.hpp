@@ -70,7 +70,7 @@ class PlanarLinkageModel {
 
   /// Validates p; throws uhaptics::Error naming the offending field.
   explicit PlanarLinkageModel(Parameters p);
-  /// Loads and validates a parameter file (devices/params/<device>.json, format version 1) and
+  /// Loads and validates a parameter file (devices/<folder>/params/<device>.json, format version 1) and
   /// checks that it describes `device` with N joints; throws uhaptics::Error naming the file and
   /// field. One class serves several devices, so the device name is an argument, not a constant.
   static PlanarLinkageModel load(const std::string& path, const std::string& device);

@@ -1,7 +1,7 @@
 #pragma once
 // What the host needs to know about a device's controller board: USB identity, channel counts and
 // the effort limits every command is held to. Loaded from the "usb" section of the device's
-// parameter file (devices/params/*.json); counts and limits come from the device model.
+// parameter file (devices/<folder>/params/*.json); counts and limits come from the device model.
 #include <array>
 #include <cstdint>
 #include <string>

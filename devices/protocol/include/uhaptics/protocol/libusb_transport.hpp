@@ -3,8 +3,8 @@
 //
 // Opening (set-up time, throws uhaptics::Error with what to do about it):
 //   libusb_init -> enumerate -> match vendor/product id from the device's parameter file -> open
-//   (permission denied: install devices/udev/99-uhaptics.rules) -> detach a kernel driver if one is
-//   bound -> claim the interface (busy: another program holds it) -> arm the IN transfer.
+//   (permission denied: install share/uhaptics/udev/99-uhaptics.rules) -> detach a kernel driver
+//   if one is bound -> claim the interface (busy: another program holds it) -> arm the IN transfer.
 // Servo path (never throws, never allocates): OUT frames are synchronous bulk transfers with a
 // timeout; IN frames arrive through one permanently re-armed asynchronous transfer so receive() can
 // wait with microsecond timeouts (libusb's synchronous calls only take milliseconds, 0 = forever).

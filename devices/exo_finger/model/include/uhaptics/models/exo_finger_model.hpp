@@ -1,8 +1,8 @@
 #pragma once
 // The underactuated finger exoskeleton of paper 000: q = (l_x, q_B) -> x = (q_MCP, q_PIP).
 //
-// Geometry (our design; the real one is not public, devices/params/exo_finger.json documents every
-// number). Hand frame: origin on the MCP axis, x distal, y palmar, flexion positive.
+// Geometry (our design; the real one is not public, devices/exo_finger/params/exo_finger.json
+// documents every number). Hand frame: origin on the MCP axis, x distal, y palmar, flexion positive.
 //   - The proximal exoskeleton link turns with the proximal phalanx: angle q_MCP.
 //   - A rocker pivots on it at B (proximal-phalanx frame); q_B is its angle from the phalanx axis
 //     (the potentiometer). A four-bar (rocker a, coupler c, output crank d on the PIP axis, fixed

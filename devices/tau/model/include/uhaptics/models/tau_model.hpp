@@ -1,6 +1,6 @@
 #pragma once
 // TAU-class 6-DoF parallel haptic device (paper 001): immutable model loaded from
-// devices/params/tau.json + a preallocated TauData workspace made from it (Model/Data split, as in
+// devices/tau/params/tau.json + a preallocated TauData workspace made from it (Model/Data split, as in
 // Pinocchio; docs/adding-a-device.md, "The model").
 //
 // Dynamics: a lumped-mass model in active-joint coordinates. Each actuated link is a rotor inertia

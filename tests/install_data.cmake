@@ -1,0 +1,35 @@
+# ctest: cmake -DBUILD=<build> -DPREFIX=<scratch prefix> -DDATADIR=<share> -P install_data.cmake
+# Installs the component holding the parameter folder and the udev rules into PREFIX and checks that
+# the installation has exactly the build's files (<build>/share/uhaptics/{params,udev}).
+file(REMOVE_RECURSE "${PREFIX}")
+execute_process(COMMAND "${CMAKE_COMMAND}" --install "${BUILD}" --prefix "${PREFIX}" --component uhaptics_data
+                RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE out)
+if(NOT rc EQUAL 0)
+  message(FATAL_ERROR "cmake --install failed (${rc}):\n${out}")
+endif()
+
+set(failures "")
+foreach(folder params udev)
+  file(GLOB built RELATIVE "${BUILD}/share/uhaptics/${folder}" "${BUILD}/share/uhaptics/${folder}/*")
+  file(GLOB installed RELATIVE "${PREFIX}/${DATADIR}/uhaptics/${folder}" "${PREFIX}/${DATADIR}/uhaptics/${folder}/*")
+  if(NOT built)
+    string(APPEND failures "the build has no ${BUILD}/share/uhaptics/${folder}/*\n")
+  endif()
+  if(NOT built STREQUAL installed)
+    string(APPEND failures "${folder}: built [${built}], installed [${installed}]\n")
+  endif()
+  foreach(name IN LISTS built)
+    execute_process(COMMAND "${CMAKE_COMMAND}" -E compare_files "${BUILD}/share/uhaptics/${folder}/${name}"
+                            "${PREFIX}/${DATADIR}/uhaptics/${folder}/${name}" RESULT_VARIABLE differ)
+    if(NOT differ EQUAL 0)
+      string(APPEND failures "${folder}/${name}: the installed file differs from the build's\n")
+    endif()
+  endforeach()
+endforeach()
+if(NOT EXISTS "${PREFIX}/${DATADIR}/uhaptics/udev/99-uhaptics.rules")
+  string(APPEND failures "no ${DATADIR}/uhaptics/udev/99-uhaptics.rules installed\n")
+endif()
+if(failures)
+  message(FATAL_ERROR "${failures}")
+endif()
+message(STATUS "installed ${PREFIX}/${DATADIR}/uhaptics/{params,udev}: as built")
