@@ -6,7 +6,8 @@
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
-#include <regex>
+#include <cctype>
+#include <cstring>
 #include <set>
 #include <sstream>
 #include <stdexcept>
@@ -180,9 +181,41 @@ double nanosecondsPer(const std::string& unit) {
   throw std::runtime_error("benchmark JSON: unknown time_unit '" + unit + "'");
 }
 
-const std::regex& markerPattern() {
-  static const std::regex pattern(R"(^[ \t]*<!--[ \t]*(begin|end) generated:[ \t]*([A-Za-z0-9_.-]+)[ \t]*-->[ \t\r]*$)");
-  return pattern;
+// A marker line: [blanks] "<!--" [blanks] ("begin" | "end") " generated:" [blanks] name [blanks] "-->"
+// [blanks or CR], the name of [A-Za-z0-9_.-]+. Parsed by hand: GCC 12's sanitizer builds warn
+// inside <regex> (maybe-uninitialized), and warnings are errors.
+bool parseMarker(const std::string& line, std::string& kind, std::string& region) {
+  std::size_t i = 0;
+  const auto blanks = [&](const char* set) {
+    while (i < line.size() && std::strchr(set, line[i]) != nullptr && line[i] != '\0') ++i;
+  };
+  const auto literal = [&](const std::string& word) {
+    if (line.compare(i, word.size(), word) != 0) return false;
+    i += word.size();
+    return true;
+  };
+  blanks(" \t");
+  if (!literal("<!--")) return false;
+  blanks(" \t");
+  if (literal("begin")) {
+    kind = "begin";
+  } else if (literal("end")) {
+    kind = "end";
+  } else {
+    return false;
+  }
+  if (!literal(" generated:")) return false;
+  blanks(" \t");
+  const std::size_t start = i;
+  while (i < line.size() && (std::isalnum(static_cast<unsigned char>(line[i])) != 0 || line[i] == '_' ||
+                             line[i] == '.' || line[i] == '-'))
+    ++i;
+  if (i == start) return false;
+  region = line.substr(start, i - start);
+  blanks(" \t");
+  if (!literal("-->")) return false;
+  blanks(" \t\r");
+  return i == line.size();
 }
 
 struct Region {
@@ -202,9 +235,8 @@ std::vector<Region> findRegions(const std::string& text, const std::string& name
     const std::size_t next = eol == std::string::npos ? text.size() : eol + 1;
     const std::string line = text.substr(pos, (eol == std::string::npos ? text.size() : eol) - pos);
     ++line_number;
-    std::smatch m;
-    if (std::regex_match(line, m, markerPattern())) {
-      const std::string kind = m[1], region = m[2];
+    std::string kind, region;
+    if (parseMarker(line, kind, region)) {
       const std::string where = name + ":" + std::to_string(line_number) + ": ";
       if (kind == "begin") {
         if (open)
