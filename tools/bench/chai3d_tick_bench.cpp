@@ -108,8 +108,9 @@ struct Scene {
     const double scale = tool->getWorkspaceScaleFactor();
     mesh->m_material->setStiffness(0.5 * device->getSpecifications().m_maxLinearStiffness / scale);
     mesh->createAABBCollisionDetector(kToolRadius);
-    // Where the device holds the tool; the sphere's equator goes 1 mm (device) past it (away from the
-    // pole, where the 64 slices meet and a contact costs CHAI3D ten times more), or stays far away.
+    // Where the device holds the tool; the sphere's equator goes 1 mm (device) past it along y, in
+    // the plane of the planar devices (and away from the pole, where the 64 slices meet and a contact
+    // costs CHAI3D ten times more), or the sphere stays far away.
     const cVector3d far(0.0, 0.0, 100.0 * kSphereRadius);
     mesh->setLocalPos(far);
     tick();
@@ -119,11 +120,11 @@ struct Scene {
       // moved clear (its own offset; the device stays where it is), the sphere placed, and the tool
       // brought onto it.
       const double depth = 1e-3 * scale;
-      tool->setLocalPos(2.0 * depth, 0.0, 0.0);
+      tool->setLocalPos(0.0, 2.0 * depth, 0.0);
       tick();
-      mesh->setLocalPos(at - cVector3d(kSphereRadius - depth, 0.0, 0.0));
+      mesh->setLocalPos(at - cVector3d(0.0, kSphereRadius - depth, 0.0));
       for (int i = 20; i >= 0; --i) {
-        tool->setLocalPos(2.0 * depth * i / 20.0, 0.0, 0.0);
+        tool->setLocalPos(0.0, 2.0 * depth * i / 20.0, 0.0);
         tick();
       }
     }
