@@ -182,10 +182,18 @@ def run_one(table, example, device, backend, display, out, screenshots, reject=F
         start = time.monotonic()
         shot = {"taken": False, "in_contact": False}
         ended_early = None
-        while time.monotonic() - start < seconds:
+        rejection = f"uhaptics: invalid device selection: UHAPTICS_DEVICE = '{device}'"
+        # A run that must be refused lasts its time and until the refusal is printed (stderr, not
+        # buffered), which a slow start (a sanitizer build on a loaded machine) can delay past it.
+        deadline = seconds + (STARTUP_GRACE if reject else 0.0)
+        while time.monotonic() - start < deadline:
             if proc.poll() is not None:
                 ended_early = proc.returncode
                 break
+            if reject and time.monotonic() - start >= seconds:
+                with open(log_path) as f:
+                    if rejection in f.read():
+                        break
             if screenshots and not shot["taken"] and time.monotonic() - start > 1.0:
                 stats = read_stats(stats_path)
                 if stats and stats.get("in_contact"):
@@ -206,7 +214,7 @@ def run_one(table, example, device, backend, display, out, screenshots, reject=F
         output = f.read()
     if reject:
         problems = []
-        if f"uhaptics: invalid device selection: UHAPTICS_DEVICE = '{device}'" not in output:
+        if rejection not in output:
             problems.append("the uhaptics slot did not report the invalid selection (is CHAI3D's stub linked?)")
         if os.path.exists(stats_path):
             problems.append("a device ran although the selection was invalid")

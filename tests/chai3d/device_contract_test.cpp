@@ -203,3 +203,60 @@ TEST_CASE("registry devices: the CHAI3D device contract through CHAI3D's handler
     }
   }
 }
+
+namespace {
+// Passes everything on and counts the commands: what DeviceSelection::wrap_joint_io hands a device.
+class CountingJointIo final : public uhaptics::JointIo {
+ public:
+  explicit CountingJointIo(std::unique_ptr<uhaptics::JointIo> inner)
+      : JointIo(inner->spec(), inner->backend()), inner_(std::move(inner)) {}
+  void open() override { inner_->open(); }
+  void close() noexcept override { inner_->close(); }
+  bool isOpen() const noexcept override { return inner_->isOpen(); }
+  bool read(double* positions) noexcept override { return inner_->read(positions); }
+  std::uint32_t sampleTimeUs() const noexcept override { return inner_->sampleTimeUs(); }
+  void command(const double* efforts) noexcept override {
+    ++commands;
+    inner_->command(efforts);
+  }
+  uhaptics::Fault advance(double dt) noexcept override { return inner_->advance(dt); }
+  bool movesOnlyInAdvance() const noexcept override { return inner_->movesOnlyInAdvance(); }
+  bool readRates(double* rates) noexcept override { return inner_->readRates(rates); }
+  bool readActual(double* positions) noexcept override { return inner_->readActual(positions); }
+  std::string describe() const override { return inner_->describe() + ", counted"; }
+  int commands = 0;
+
+ private:
+  std::unique_ptr<uhaptics::JointIo> inner_;
+};
+}  // namespace
+
+TEST_CASE("registry devices: the selection's wrap_joint_io is the joint I/O the device ticks over",
+          "[chai3d][contract]") {
+  for (const std::string& name : uhaptics::adapter::deviceNames()) {
+    INFO("device " << name);
+    CountingJointIo* counting = nullptr;
+    uhaptics::DeviceSelection selection;
+    selection.device = name;
+    selection.hand_enabled = false;
+    selection.wrap_joint_io = [&counting](std::unique_ptr<uhaptics::JointIo> io) -> std::unique_ptr<uhaptics::JointIo> {
+      auto wrapped = std::make_unique<CountingJointIo>(std::move(io));
+      counting = wrapped.get();
+      return wrapped;
+    };
+    chai3d::cUhapticsDevicePtr device = uhaptics::adapter::createDevice(selection);
+    device->setLockStep(true);
+    REQUIRE(device->open());
+    REQUIRE(counting != nullptr);
+    const int before = counting->commands;
+    for (int i = 0; i < 10; ++i) CHECK(device->setForceAndTorqueAndGripperForce(cVector3d(0, 0, 0.1), cVector3d(0, 0, 0), 0.0));
+    CHECK(counting->commands - before == 10);  // one command per lock-step tick, through the wrapper
+    CHECK(device->close());
+
+    // A wrapper that returns nothing: open() refuses, nothing runs.
+    selection.wrap_joint_io = [](std::unique_ptr<uhaptics::JointIo>) { return std::unique_ptr<uhaptics::JointIo>(); };
+    chai3d::cUhapticsDevicePtr refused = uhaptics::adapter::createDevice(selection);
+    CHECK_FALSE(refused->open());
+    CHECK_FALSE(refused->isDeviceReady());
+  }
+}

@@ -146,6 +146,7 @@ TEST_CASE("the benchmark tables come from Google Benchmark's JSON and round-trip
   CHECK(once.rfind("Prose.\n", 0) == 0);
   CHECK(once.find("\nBetween.\n") != std::string::npos);
   CHECK(once.substr(once.size() - 7) == "After.\n");
+  CHECK(regions.count("bench-chai3d-tick") == 0);  // no CHAI3D tick runs in this JSON
   CHECK_THROWS_WITH(benchmarkRegions("{\"context\": {}}", {}), Catch::Contains("no \"benchmarks\" array"));
   CHECK_THROWS_WITH(benchmarkRegions("not json", {}), Catch::Contains("does not parse"));
 }
@@ -158,4 +159,22 @@ TEST_CASE("the report heads each paper's rows with the title its device definiti
   }
   CHECK(paperHeading("chai3d").find("CHAI3D") != std::string::npos);
   CHECK(paperHeading("999") == "Paper 999");
+}
+
+TEST_CASE("the CHAI3D tick table: what each device adds to CHAI3D's own tick", "[experiments][report]") {
+  const std::string json = R"({"context": {"date": "d", "num_cpus": 2, "mhz_per_cpu": 2000}, "benchmarks": [
+    {"name": "BM_Chai3dTick/tau/contact/chai3d", "run_type": "iteration", "cpu_time": 10000, "time_unit": "ns", "allocs_per_tick": 0.5},
+    {"name": "BM_Chai3dTick/tau/contact/uhaptics", "run_type": "iteration", "cpu_time": 14, "time_unit": "us", "allocs_per_tick": 0.5},
+    {"name": "BM_Chai3dTick/tau/free/chai3d", "run_type": "iteration", "cpu_time": 500, "time_unit": "ns", "allocs_per_tick": 0},
+    {"name": "BM_Chai3dTick/tau/free/uhaptics", "run_type": "iteration", "cpu_time": 1300, "time_unit": "ns", "allocs_per_tick": 0},
+    {"name": "BM_Chai3dTick/exo/contact/chai3d", "run_type": "iteration", "cpu_time": 10000, "time_unit": "ns"},
+    {"name": "BM_Chai3dTick/exo/contact/uhaptics", "run_type": "iteration", "error_occurred": true},
+    {"name": "BM_Chai3dTick/tau/contact/uhaptics_mean", "run_type": "aggregate", "cpu_time": 1}]})";
+  const auto regions = benchmarkRegions(json, {});
+  REQUIRE(regions.count("bench-chai3d-tick") == 1);
+  CHECK(regions.count("bench-ticks") == 0);  // the CHAI3D ticks have their own table
+  const std::string& t = regions.at("bench-chai3d-tick");
+  // tau: 4 us over CHAI3D's 10 us contact tick (40 %); 0.8 us in free space, 20 % of its 4 us.
+  CHECK(t.find("| tau | 10 us / 0.5 us | 14 us / 1.3 us | 4 us (40 %) | 0.8 us (20 %) | 0.5 / 0 |") != std::string::npos);
+  CHECK(t.find("| exo |") == std::string::npos);  // incomplete (a run failed): no row
 }

@@ -187,6 +187,43 @@ TEST_CASE("Contact classifier: a soft surface stays on the spring and reports it
   }
 }
 
+TEST_CASE("Contact classifier: a magnet's pull outside the surface neither sets the normal nor the reading",
+          "[tau][classifier]") {
+  // CHAI3D's cEffectMagnet (11-effects' first sphere): within reach outside the surface it pulls
+  // the tool in with the surface's own stiffness, F = -k h n at height h, so the force turns round
+  // at the surface and pushes out below it. The contact starts on the pull (|F| > 0.3 N above the
+  // surface) along -n; the probe must still measure the surface, along +n, and not a secant through
+  // the force's reversal. The tool comes in at an angle (the hand's path is not along the normal).
+  Plane plane;
+  plane.normal = Vec3(0.0, 0.6, 0.8);
+  const double reach = 1e-3;  // m, the magnet's reach above the surface
+  const Vec3 velocity = -kApproach * Vec3(0.3, 0.3, 1.0).normalized();
+  for (const double stiffness : {2400.0, 4800.0}) {
+    CAPTURE(stiffness);
+    plane.stiffness = stiffness;
+    Classifier c({});
+    Tally tally;
+    Vec3 tool = plane.point + 1.5 * reach * plane.normal;
+    bool pulled = false;
+    for (int i = 0; i < 1000 && plane.depth(tool) < 2e-3 && tally.engaged + tally.soft == 0; ++i) {
+      const double height = -plane.depth(tool);
+      const Vec3 pull = height > 0.0 && height < reach ? Vec3(-stiffness * height * plane.normal) : Vec3::Zero();
+      tick(c, plane.force(tool, velocity) + pull, tool, tally);
+      pulled = pulled || (c.state() != State::kFree && height > 0.0);
+      tool += velocity * kPeriod;
+    }
+    CHECK(pulled);  // the contact did start on the magnet's pull
+    CHECK(c.stiffness() == Approx(stiffness).epsilon(0.05));
+    if (stiffness >= c.options().stiff_threshold) {
+      REQUIRE(tally.engaged == 1);
+      CHECK(angle(c.surface().normal, plane.normal) < 5.0);
+    } else {
+      CHECK(tally.soft == 1);
+      CHECK(tally.engaged == 0);
+    }
+  }
+}
+
 TEST_CASE("Contact classifier: release only after release_ticks without force, a renewed push held at once",
           "[tau][classifier]") {
   Classifier::Options options;

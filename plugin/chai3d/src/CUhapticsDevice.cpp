@@ -76,9 +76,17 @@ double cUhapticsDevice::wallTime() const noexcept {
 std::unique_ptr<uhaptics::JointIo> cUhapticsDevice::makeJointIo() {
   uhaptics::JointIoOptions options;
   options.params_dir = paramsDirectory();
-  if (m_selection.backend != "sim") return uhaptics::makeJointIo(m_selection.device, m_selection.backend, options);
-  const uhaptics::DeviceDefinition& definition = uhaptics::findDevice(m_selection.device);
-  return uhaptics::makeSimJointIo(uhaptics::boardSpec(definition, options.params_dir), [this] { return makeSimulatedPlant(); });
+  std::unique_ptr<uhaptics::JointIo> io;
+  if (m_selection.backend != "sim") {
+    io = uhaptics::makeJointIo(m_selection.device, m_selection.backend, options);
+  } else {
+    const uhaptics::DeviceDefinition& definition = uhaptics::findDevice(m_selection.device);
+    io = uhaptics::makeSimJointIo(uhaptics::boardSpec(definition, options.params_dir), [this] { return makeSimulatedPlant(); });
+  }
+  if (!m_selection.wrap_joint_io) return io;
+  io = m_selection.wrap_joint_io(std::move(io));
+  if (!io) throw uhaptics::Error("device '" + m_selection.device + "': the selection's wrap_joint_io returned no joint I/O");
+  return io;
 }
 
 bool cUhapticsDevice::readJointsLocked(bool a_first) noexcept {

@@ -317,6 +317,64 @@ GeneratedRegions reproductionRegions(const std::vector<ExperimentResult>& experi
   return {{"reproduction-summary", summary.str()}, {"reproduction", table.str()}};
 }
 
+// BM_Chai3dTick/<device>/<contact|free>/<chai3d|uhaptics> (tools/bench/chai3d_tick_bench.cpp): per
+// device, CHAI3D's tick on a still device of the same specification, and with the device behind the
+// tool; the difference is the device's cost. Empty without such runs.
+std::string chai3dTickTable(const nlohmann::json& data, const std::string& head) {
+  struct Ticks {
+    double ns[2][2] = {{-1.0, -1.0}, {-1.0, -1.0}};  // [contact, free][chai3d, uhaptics]
+    double allocs[2][2] = {{0.0, 0.0}, {0.0, 0.0}};
+  };
+  std::vector<std::pair<std::string, Ticks>> devices;
+  const std::string prefix = "BM_Chai3dTick/";
+  for (const auto& b : data["benchmarks"]) {
+    const std::string name = b.value("name", std::string());
+    if (name.compare(0, prefix.size(), prefix) != 0 || b.value("error_occurred", false)) continue;
+    if (b.value("run_type", std::string("iteration")) != "iteration") continue;
+    std::vector<std::string> parts;
+    std::stringstream split(name.substr(prefix.size()));
+    for (std::string part; std::getline(split, part, '/');) parts.push_back(part);
+    if (parts.size() != 3 || (parts[1] != "contact" && parts[1] != "free") || (parts[2] != "chai3d" && parts[2] != "uhaptics"))
+      continue;
+    if (!b.contains("cpu_time") || !b["cpu_time"].is_number())
+      throw std::runtime_error("benchmark JSON: " + name + " has no cpu_time");
+    auto it = std::find_if(devices.begin(), devices.end(), [&](const auto& d) { return d.first == parts[0]; });
+    if (it == devices.end()) it = devices.insert(devices.end(), {parts[0], Ticks{}});
+    const int where = parts[1] == "contact" ? 0 : 1, who = parts[2] == "chai3d" ? 0 : 1;
+    it->second.ns[where][who] = b["cpu_time"].get<double>() * nanosecondsPer(b.value("time_unit", std::string("ns")));
+    it->second.allocs[where][who] =
+        b.contains("allocs_per_tick") && b["allocs_per_tick"].is_number() ? b["allocs_per_tick"].get<double>() : 0.0;
+  }
+  const auto percent = [](double v) {
+    char buf[32];
+    std::snprintf(buf, sizeof buf, "%.0f %%", 100.0 * v);
+    return std::string(buf);
+  };
+  std::ostringstream t;
+  t << head << "| device | CHAI3D alone, contact / free | with the device, contact / free | device's cost in contact "
+               "(share of CHAI3D's contact tick) | device's cost in free space (share of its cost in contact) | heap "
+               "allocations per tick, CHAI3D alone / added by the device |\n"
+    << "|---|---:|---:|---:|---:|---:|\n";
+  std::size_t rows = 0;
+  for (const auto& [device, tick] : devices) {
+    bool complete = true;
+    for (const auto& where : tick.ns)
+      for (const double ns : where) complete = complete && ns > 0.0;
+    if (!complete) continue;
+    const double contact = tick.ns[0][1] - tick.ns[0][0];
+    const double free = tick.ns[1][1] - tick.ns[1][0];
+    const double chai3d_allocs = std::max(tick.allocs[0][0], tick.allocs[1][0]);
+    const double added_allocs = std::max(tick.allocs[0][1] - tick.allocs[0][0], tick.allocs[1][1] - tick.allocs[1][0]);
+    t << "| " << markdownCell(device) << " | " << timeText(tick.ns[0][0]) << " / " << timeText(tick.ns[1][0]) << " | "
+      << timeText(tick.ns[0][1]) << " / " << timeText(tick.ns[1][1]) << " | " << timeText(contact) << " ("
+      << percent(contact / tick.ns[0][0]) << ") | " << timeText(free) << " ("
+      << (contact > 0.0 ? percent(free / contact) : std::string("-")) << ") | " << counterText(chai3d_allocs) << " / "
+      << counterText(added_allocs) << " |\n";
+    ++rows;
+  }
+  return rows > 0 ? t.str() : "";
+}
+
 GeneratedRegions benchmarkRegions(const std::string& json_text, const Metadata& metadata) {
   nlohmann::json data;
   try {
@@ -354,7 +412,8 @@ GeneratedRegions benchmarkRegions(const std::string& json_text, const Metadata& 
     if (name.empty() || !number(b, "cpu_time", cpu))
       throw std::runtime_error("benchmark JSON: a run without a name or cpu_time");
     const double ns = cpu * nanosecondsPer(b.value("time_unit", std::string("ns")));
-    if (number(b, "allocs_per_tick", allocs) || number(b, "allocs_per_step", allocs)) {
+    const bool chai3d_tick = name.rfind("BM_Chai3dTick/", 0) == 0;  // its own table
+    if (!chai3d_tick && (number(b, "allocs_per_tick", allocs) || number(b, "allocs_per_step", allocs))) {
       ticks << "| `" << markdownCell(name) << "` | " << timeText(ns) << " | " << counterText(allocs) << " | "
             << (ns > 0.0 ? wholeText(1e6 / ns) : std::string("-")) << " |\n";
       ++tick_rows;
@@ -383,6 +442,8 @@ GeneratedRegions benchmarkRegions(const std::string& json_text, const Metadata& 
   }
   GeneratedRegions out;
   if (tick_rows > 0) out["bench-ticks"] = ticks.str();
+  const std::string chai3d_tick = chai3dTickTable(data, head.str());
+  if (!chai3d_tick.empty()) out["bench-chai3d-tick"] = chai3d_tick;
   if (!curves.empty()) {
     std::ostringstream tve;
     tve << head.str() << "| benchmark | curve | swept | time per call and error at each value (default in bold) |\n"

@@ -186,9 +186,25 @@ void TauContactClassifier::update(const Vec3& force_in, const Vec3& position_in,
       // over a curved surface at constant depth adds nothing to either, where a secant from the
       // onset would count the surface's curvature as depth). The proxy is placed with the nominal
       // stiffness until the probe has measured the scene's.
-      trackSurface(force, position, options_.nominal_stiffness, kProbeGain);
-      probe_force_ += normal_.dot(force - last_force_);
-      probe_depth_ += normal_.dot(last_position_ - position);
+      //
+      // The probe measures one surface pushing the tool out while the tool goes in; what else the
+      // force does restarts it: a force against the normal (the contact began on an effect pulling
+      // the tool in, such as a magnet outside its object, whose force turns round at the surface)
+      // restarts it along the new force, and the tool coming back out past where the probe began
+      // restarts it from there (a secant through the way out can read any slope).
+      if (!(normal_.dot(force) > 0.0)) {
+        if (magnitude > options_.contact_force) startContact(force, mode);
+        probe_force_ = 0.0;
+        probe_depth_ = 0.0;
+      } else {
+        trackSurface(force, position, options_.nominal_stiffness, kProbeGain);
+        probe_force_ += normal_.dot(force - last_force_);
+        probe_depth_ += normal_.dot(last_position_ - position);
+        if (probe_depth_ < 0.0) {
+          probe_force_ = 0.0;
+          probe_depth_ = 0.0;
+        }
+      }
       if (probe_depth_ >= kProbeDepth) {
         const double k = probe_force_ / probe_depth_;
         stiffness_ = std::isfinite(k) ? std::max(0.0, k) : 0.0;

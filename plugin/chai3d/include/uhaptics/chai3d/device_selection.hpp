@@ -21,6 +21,7 @@
 #include <string>
 #include <vector>
 
+#include "uhaptics/backends/joint_io.hpp"
 #include "uhaptics/backends/scripted_hand.hpp"
 #include "uhaptics/models/param_file.hpp"
 
@@ -37,6 +38,10 @@ struct DeviceSelection {
   bool hand_path_given = false;
   std::optional<ParamFile> config;  // for device-specific options ("options/<device>/<name>")
   std::map<std::string, double> options;  // device options set in code; win over the config file
+  /// Set in code only: receives the joint I/O the backend made (not yet open) and returns the one
+  /// the device uses, e.g. a wrapper that records, replays, injects faults or holds the plant still
+  /// (the CHAI3D tick benchmark). Empty: the backend's own.
+  std::function<std::unique_ptr<JointIo>(std::unique_ptr<JointIo>)> wrap_joint_io;
 
   /// A device option (options map, else config file, else fallback); validated against [lo, hi].
   double option(const std::string& name, double fallback, double lo, double hi) const;

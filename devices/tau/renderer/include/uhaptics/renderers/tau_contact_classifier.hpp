@@ -15,7 +15,10 @@
 // stable spring walls): the LQR wall takes the contact over (Events::engaged). k below it: the
 // spring renders the whole contact (Events::soft_contact): a surface the spring renders stably keeps
 // the compliance the application gave it. A contact too light to finish the probe (its force must
-// rise by k x 0.2 mm, ~1 N) stays with the spring. Mode kLqr engages the wall after the probe
+// rise by k x 0.2 mm, ~1 N) stays with the spring. The probe measures one surface pushing the
+// tool out while it goes in: a force turning against the contact's normal (the contact began on an
+// effect pulling the tool in, such as CHAI3D's magnet) restarts it along the new force, and the
+// tool coming back out past the probe's start restarts it there. Mode kLqr engages the wall after the probe
 // whatever k is (a soft object is then rendered rigid); mode kSpring never engages it.
 //
 // The wall's plane follows the application's proxy. A proxy force is F = k (proxy - tool), so the
