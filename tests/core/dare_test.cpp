@@ -219,3 +219,121 @@ TEST_CASE("DARE on the hard case (integral weights 1e7 and 1e10) agrees with the
           1e-8 * res.K.norm());
   }
 }
+
+namespace {
+// The plant of a weakly coupled integrator: x1' = x2, x2' = -w^2 x1 - 0.1 w x2 + u, x3' = -x1 with
+// w = 1e4 rad/s, ZOH at 1 ms. u reaches x3 only through x1, whose static gain is 1 / w^2 = 1e-8, so
+// in these units the integrator's column of [A - I, B] is small next to the velocity entries (1e3).
+// `coupled` false gives its unstabilizable twin: the integrator not driven at all (x3' = 0), or, with
+// `unstable_twin`, diverging on its own (x3' = 10 x3), both with |z| >= 1 and no input path.
+StateSpace weakIntegratorPlant(bool coupled, bool unstable_twin = false) {
+  const double w = 1e4;
+  StateSpace c;
+  c.A = MatX::Zero(3, 3);
+  c.B = MatX::Zero(3, 1);
+  c.A << 0, 1, 0, -w * w, -0.1 * w, 0, coupled ? -1.0 : 0.0, 0, unstable_twin ? 10.0 : 0.0;
+  c.B << 0, 1, 0;
+  return discretizeZoh(c, 1e-3);
+}
+
+using MatL = Eigen::Matrix<long double, Eigen::Dynamic, Eigen::Dynamic>;
+
+// Independent reference: Hewer's iteration (Newton's method on the DARE) in long double. From a
+// stabilizing K: solve the Lyapunov equation P = Acl^T P Acl + Q + K^T R K by its Kronecker form, then
+// K <- (R + B^T P B)^-1 B^T P A. Converges quadratically from any stabilizing K; K = 0 is one here
+// (the discrete integrator's eigenvalue is 1 - 4e-12). No doubling, no balancing, 64-bit mantissa.
+MatL hewerDare(const MatX& A_, const MatX& B_, const MatX& Q_, const MatX& R_, int& iterations) {
+  const MatL A = A_.cast<long double>(), B = B_.cast<long double>(), Q = Q_.cast<long double>(),
+             R = R_.cast<long double>();
+  const Eigen::Index n = A.rows();
+  MatL K = MatL::Zero(B.cols(), n), P(n, n);
+  for (iterations = 1; iterations <= 100; ++iterations) {
+    const MatL Acl = A - B * K;
+    const MatL rhs = Q + K.transpose() * R * K;
+    MatL L = MatL::Identity(n * n, n * n);
+    for (Eigen::Index i = 0; i < n; ++i)
+      for (Eigen::Index j = 0; j < n; ++j)
+        for (Eigen::Index k = 0; k < n; ++k)
+          for (Eigen::Index l = 0; l < n; ++l) L(i * n + j, k * n + l) -= Acl(k, i) * Acl(l, j);  // (Acl^T P Acl)_ij
+    Eigen::Matrix<long double, Eigen::Dynamic, 1> v(n * n);
+    for (Eigen::Index i = 0; i < n; ++i)
+      for (Eigen::Index j = 0; j < n; ++j) v(i * n + j) = rhs(i, j);
+    // Partial pivoting: FullPivLU would call the 1 - A33^2 = 7e-12 pivot a rank loss (relative to 1e7).
+    const Eigen::Matrix<long double, Eigen::Dynamic, 1> p = L.partialPivLu().solve(v);
+    for (Eigen::Index i = 0; i < n; ++i)
+      for (Eigen::Index j = 0; j < n; ++j) P(i, j) = p(i * n + j);
+    P = 0.5L * (P + P.transpose()).eval();
+    const MatL Knext = (R + B.transpose() * P * B).fullPivLu().solve(B.transpose() * P * A);
+    const long double change = (Knext - K).norm() / Knext.norm();
+    K = Knext;
+    if (change < 1e-12L) break;  // quadratic: the next step would change K by ~1e-24, below its rounding
+  }
+  return P;
+}
+}  // namespace
+
+TEST_CASE("DARE solves a weakly coupled integrator (static gain 1e-8 at w = 1e4 rad/s) and agrees with Hewer's "
+          "iteration") {
+  const StateSpace d = weakIntegratorPlant(true);
+  const MatX Q = VecX((VecX(3) << 1.0, 1e3, 1e7).finished()).asDiagonal();
+  const MatX R = MatX::Identity(1, 1);
+  const DareResult res = solveDare(d.A, d.B, Q, R);
+  int iterations = 0;
+  const MatL Pref = hewerDare(d.A, d.B, Q, R, iterations);
+  const MatX Pd = Pref.cast<double>();
+  // Residual of the equation in the caller's units, relative to |P|: each term is O(|P|) and rounds
+  // to ~1e-16 |P|; 1e-9 is the solver's own acceptance bound (1e-8 on its normalization) tightened
+  // by the factor |P| / (|Q| + |A^T P A|) ~ 1 of this plant. Measured 3e-20 (P11 dominates).
+  const MatX BtPA = d.B.transpose() * res.P * d.A;
+  const MatX rhs = d.A.transpose() * res.P * d.A - BtPA.transpose() * (R + d.B.transpose() * res.P * d.B).ldlt().solve(BtPA) + Q;
+  const double residual = (res.P - rhs).norm() / res.P.norm();
+  const double p_min = Eigen::SelfAdjointEigenSolver<MatX>(res.P, Eigen::EigenvaluesOnly).eigenvalues().minCoeff();
+  const double agreement = (res.P - Pd).norm() / Pd.norm();
+  INFO("SDA " << res.iterations << " doublings, residual/|P| " << residual << ", closed-loop radius "
+              << res.closed_loop_spectral_radius << ", Hewer " << iterations << " steps, |P - P_ref|/|P_ref| "
+              << agreement << ", |P| " << res.P.norm());
+  REQUIRE(iterations <= 100);
+  CHECK(residual < 1e-9);
+  CHECK((res.P - res.P.transpose()).norm() == 0.0);
+  CHECK(p_min > 0.0);
+  CHECK(res.closed_loop_spectral_radius < 1.0);
+  // The closed loop's slowest pole is 1 - 3e-8, so the DARE's condition is ~1 / (1 - rho^2) ~ 2e7:
+  // double rounding (1e-16) allows ~2e-9 relative in P. Measured 1.3e-10; 1e-8 leaves a factor 5.
+  CHECK(agreement < 1e-8);
+}
+
+TEST_CASE("DARE verdicts on the weakly coupled integrator and its unstabilizable twins do not depend on the state "
+          "units (diagonal similarities 1e-6..1e6)") {
+  const MatX Q = VecX((VecX(3) << 1.0, 1e3, 1e7).finished()).asDiagonal();
+  const MatX R = MatX::Identity(1, 1);
+  const StateSpace solvable = weakIntegratorPlant(true);
+  const MatX P0 = solveDare(solvable.A, solvable.B, Q, R).P;
+  const std::array<double, 5> exponents{-6, -3, 0, 3, 6};
+  for (double e0 : exponents)
+    for (double e1 : exponents)
+      for (double e2 : exponents) {
+        // x' = S x: A' = S A S^-1, B' = S B, Q' = S^-1 Q S^-1, and the exact P' = S^-1 P S^-1.
+        const VecX s = (VecX(3) << std::pow(10.0, e0), std::pow(10.0, e1), std::pow(10.0, e2)).finished();
+        const auto S = s.asDiagonal();
+        const auto Si = s.cwiseInverse().asDiagonal();
+        const MatX Qs = Si * Q * Si;
+        INFO("state scales 1e" << e0 << ", 1e" << e1 << ", 1e" << e2);
+        const DareResult res = solveDare(S * solvable.A * Si, S * solvable.B, Qs, R);
+        // Back in the original units. The scaled plant is the original one rounded entrywise (S is
+        // not a power of two), a 1e-16 relative perturbation times the condition ~2e7 (test above).
+        CHECK((S * res.P * S - P0).norm() < 1e-8 * P0.norm());
+        CHECK(res.closed_loop_spectral_radius < 1.0);
+        for (bool unstable : {false, true}) {
+          const StateSpace twin = weakIntegratorPlant(false, unstable);
+          CHECK_THROWS_WITH(solveDare(S * twin.A * Si, S * twin.B, Qs, R),
+                            Catch::Contains("DARE: (A, B) is not stabilizable") &&
+                                Catch::Contains("no stabilizing LQR gain exists"));
+        }
+        // With the integrator unweighted the pair is not detectable and must be refused in any units.
+        // Which test names it depends on the units: without a weight nothing fixes the integrator's
+        // scale in the balancing, so its weak input coupling may be judged first.
+        MatX Qd = Qs;
+        Qd(2, 2) = 0.0;
+        CHECK_THROWS_AS(solveDare(S * solvable.A * Si, S * solvable.B, Qd, R), Error);
+      }
+}

@@ -289,10 +289,11 @@ TEST_CASE("Contact classifier: a tilted plane's normal is tracked, friction does
   }
   INFO("normal off by up to " << worst << " deg, the application's force by " << force_tilt << " deg");
   CHECK(force_tilt > 21.0);  // friction tilted the force
-  // Within 3 deg: the first 0.5 mm of the slide (25 ms), before the proxy's path is known, turns
-  // the normal toward the tilted force at the slow gain (200 ms: 25 x 0.005 x 21.8 deg = 2.7 deg,
-  // measured 2.5 deg); then the path removes it. Without that, the normal would follow the force.
-  CHECK(worst < 3.0);
+  // Within 0.5 deg: over the first 0.5 mm of the slide (25 ms), before the proxy's path is known,
+  // the normal stays (a proxy with no path says nothing about the surface; measured 0.11 deg); then
+  // the path removes the friction. Turning toward the force at the slow gain meanwhile would tilt it
+  // 25 x 0.005 x 21.8 deg = 2.7 deg, and following the force, 21.8 deg.
+  CHECK(worst < 0.5);
   CHECK(tally.engaged == 1);
   CHECK(tally.released == 0);
   CHECK(planeOffset(c, plane) == Approx(-kHoldForce / plane.stiffness).margin(2e-5));

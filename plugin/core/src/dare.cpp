@@ -70,6 +70,58 @@ bool hautus(const MatX& A, const MatX& X, double rank_tolerance, const char* wha
   return true;
 }
 
+// Scale of every state for the precondition tests: x = D x_b with D = diag(2^k), chosen by
+// coordinate descent to minimize |offdiag(D^-1 A D)|^2 + |D^-1 G D^-1|^2 + |D Q D|^2, G = B R^-1 B^T
+// (the blocks of the DARE's symplectic pencil, which SLICOT and SciPy balance before their solves).
+// Why this and not A alone: a rank test judges "zero" relative to the other entries, so its verdict
+// depends on the state units. The objective is convex in log d, and a diagonal similarity of the
+// plant (A -> S A S^-1, B -> S B, Q -> S^-1 Q S^-1) only shifts log d, so the balanced triple, and
+// with it the verdict, is the same in any state units up to the power-of-2 rounding. G rather than
+// B makes it independent of input units, and a common factor on Q and R shifts all log d equally.
+// Q matters: an integrator that feeds nothing back (an empty column of A) has its scale set only by
+// its weight; balancing A alone would leave it in the caller's units, where a weak but real input
+// coupling (paper 001's integrators next to fast joint modes) looks like rank loss.
+// A state with entries on one side only (e.g. decoupled and unweighted) has no minimum and keeps d = 1.
+VecX balancingScale(const MatX& A, const MatX& G, const MatX& Q) {
+  const Eigen::Index n = A.rows();
+  MatX Ab = A, Gb = G, Qb = Q;
+  VecX d = VecX::Ones(n);
+  for (int sweep = 0; sweep < 100; ++sweep) {
+    bool changed = false;
+    for (Eigen::Index i = 0; i < n; ++i) {
+      // f(s) = left1 / s^2 + left2 / s^4 + right1 s^2 + right2 s^4 when d_i is multiplied by s.
+      double left1 = Gb.row(i).squaredNorm() + Gb.col(i).squaredNorm() - 2.0 * Gb(i, i) * Gb(i, i);
+      double right1 = Qb.row(i).squaredNorm() + Qb.col(i).squaredNorm() - 2.0 * Qb(i, i) * Qb(i, i);
+      left1 += Ab.row(i).squaredNorm() - Ab(i, i) * Ab(i, i);
+      right1 += Ab.col(i).squaredNorm() - Ab(i, i) * Ab(i, i);
+      const double left2 = Gb(i, i) * Gb(i, i), right2 = Qb(i, i) * Qb(i, i);
+      const double left = left1 + left2, right = right1 + right2;
+      if (!(left > 0.0) || !(right > 0.0) || !std::isfinite(left + right)) continue;
+      const auto f = [&](int k) {
+        const double s2 = std::ldexp(1.0, 2 * k), s4 = std::ldexp(1.0, 4 * k);
+        return left1 / s2 + left2 / s4 + right1 * s2 + right2 * s4;
+      };
+      // f is convex in k: walk downhill in whole powers of two (exact, no rounding).
+      int k = 0;
+      const int step = f(1) < f(0) ? 1 : (f(-1) < f(0) ? -1 : 0);
+      if (step == 0) continue;
+      while (std::abs(k) < 200 && f(k + step) < f(k)) k += step;
+      if (!(f(k) < 0.95 * f(0))) continue;  // a margin so that the sweeps terminate
+      const double s = std::ldexp(1.0, k);
+      d(i) *= s;
+      Ab.row(i) /= s;
+      Ab.col(i) *= s;
+      Gb.row(i) /= s;
+      Gb.col(i) /= s;
+      Qb.row(i) *= s;
+      Qb.col(i) *= s;
+      changed = true;
+    }
+    if (!changed) break;
+  }
+  return d;
+}
+
 void requireFinite(const MatX& M, const char* name) {
   if (!M.allFinite()) throw Error(std::string("DARE: ") + name + " contains NaN or Inf");
 }
@@ -81,15 +133,27 @@ bool isStabilizable(const MatX& A, const MatX& B, double rank_tolerance, std::st
 }
 
 bool isDetectable(const MatX& A, const MatX& Q, double rank_tolerance, std::string* why) {
-  // Q = C^T C: rows of C from the eigen-decomposition of Q, dropping its null space.
-  Eigen::SelfAdjointEigenSolver<MatX> es(0.5 * (Q + Q.transpose()));
+  // Q = C^T C. Output scaling (rows of C) changes no observability, so Q is first brought to unit
+  // diagonal, Q = W Qn W with W = sqrt(diag Q): a weight of 1e-80 next to 1 is then a full output
+  // (as B's columns are normalized above), while a null direction of a non-diagonal Q still shows as
+  // an eigenvalue of Qn at rounding level. States with zero weight keep W = 0.
+  const Eigen::Index n = Q.rows();
+  const MatX Qs = 0.5 * (Q + Q.transpose());
+  VecX w(n), w_inv(n);
+  for (Eigen::Index i = 0; i < n; ++i) {
+    w(i) = Qs(i, i) > 0.0 ? std::sqrt(Qs(i, i)) : 0.0;
+    w_inv(i) = w(i) > 0.0 ? 1.0 / w(i) : 0.0;
+  }
+  // Rows of C from the eigen-decomposition of Qn, dropping its null space.
+  Eigen::SelfAdjointEigenSolver<MatX> es(w_inv.asDiagonal() * Qs * w_inv.asDiagonal());
   const double q_max = std::max(es.eigenvalues().cwiseAbs().maxCoeff(), 0.0);
-  const double cut = 1e-14 * static_cast<double>(Q.rows()) * q_max;
-  MatX Ct(Q.rows(), 0);
-  for (Eigen::Index i = 0; i < Q.rows(); ++i) {
+  const double cut = 1e-14 * static_cast<double>(n) * q_max;
+  MatX Ct(n, 0);
+  for (Eigen::Index i = 0; i < n; ++i) {
     if (es.eigenvalues()(i) > cut) {
+      const VecX c = w.asDiagonal() * es.eigenvectors().col(i);
       Ct.conservativeResize(Eigen::NoChange, Ct.cols() + 1);
-      Ct.col(Ct.cols() - 1) = es.eigenvectors().col(i);  // unit norm already
+      Ct.col(Ct.cols() - 1) = c / c.stableNorm();
     }
   }
   // Observability of (A, C) is controllability of (A^T, C^T).
@@ -124,19 +188,28 @@ DareResult solveDare(const MatX& A, const MatX& B, const MatX& Q, const MatX& R,
   if (Eigen::SelfAdjointEigenSolver<MatX>(Q, Eigen::EigenvaluesOnly).eigenvalues().minCoeff() < -1e-12 * q_scale)
     throw Error("DARE: Q is not positive semidefinite");
 
+  // Everything below runs in balanced state units (balancingScale): x = D x_b, so A_b = D^-1 A D,
+  // B_b = D^-1 B, Q_b = D Q D, P = D^-1 P_b D^-1, K = K_b D^-1. D holds powers of two, so the change
+  // of units is exact; it makes the rank tests' thresholds and the doubling's rounding independent of
+  // the caller's state units (eigenvalues and ranks are unchanged by the similarity).
+  const MatX BLinvT = r_llt.matrixL().solve(B.transpose()).transpose();  // B L^-T
+  const VecX d = balancingScale(A, BLinvT * BLinvT.transpose(), Q);
+  const VecX d_inv = d.cwiseInverse();
+  const MatX Ab = d_inv.asDiagonal() * A * d.asDiagonal();
+  const MatX Bb = d_inv.asDiagonal() * B;
+  const MatX Qb = d.asDiagonal() * Q * d.asDiagonal();
   if (options.check_preconditions) {
     std::string why;
-    if (!isStabilizable(A, B, options.rank_tolerance, &why))
+    if (!isStabilizable(Ab, Bb, options.rank_tolerance, &why))
       throw Error("DARE: (A, B) is not stabilizable: " + why + "; no stabilizing LQR gain exists");
-    if (!isDetectable(A, Q, options.rank_tolerance, &why))
+    if (!isDetectable(Ab, Qb, options.rank_tolerance, &why))
       throw Error("DARE: (A, Q) is not detectable: " + why + "; penalize that mode in Q");
   }
 
   // SDA iteration: A_k -> 0, G_k -> controllability Gramian-like term, H_k -> P.
-  const MatX BLinvT = r_llt.matrixL().solve(B.transpose()).transpose();  // B L^-T
-  MatX Ak = A;
-  MatX Gk = BLinvT * BLinvT.transpose();  // B R^-1 B^T
-  MatX Hk = Q;
+  MatX Ak = Ab;
+  MatX Gk = d_inv.asDiagonal() * BLinvT * BLinvT.transpose() * d_inv.asDiagonal();  // B_b R^-1 B_b^T
+  MatX Hk = Qb;
   const MatX I = MatX::Identity(n, n);
   DareResult result;
   bool converged = false;
@@ -150,11 +223,20 @@ DareResult solveDare(const MatX& A, const MatX& B, const MatX& Q, const MatX& R,
     Ak = Ak * V1;
     Gk = 0.5 * (Gnext + Gnext.transpose());
     Hnext = 0.5 * (Hnext + Hnext.transpose());
-    const double change = (Hnext - Hk).stableNorm();
+    // Change of every entry relative to sqrt(H_ii H_jj) (its bound for a PSD H): a state with a
+    // small weight next to heavy ones converges on its own scale, not on the heaviest state's.
+    // (Square roots taken separately: P reaches 1e163 for the weakest inputs, where H_ii H_jj overflows.)
+    const VecX root = Hnext.diagonal().cwiseAbs().cwiseSqrt();
+    double change = 0.0;
+    for (Eigen::Index j = 0; j < n; ++j)
+      for (Eigen::Index i = 0; i < n; ++i) {
+        const double delta = std::abs(Hnext(i, j) - Hk(i, j));
+        if (delta > 0.0) change = std::max(change, delta / root(i) / root(j));
+      }
     Hk = std::move(Hnext);
     result.iterations = k + 1;
     if (!Hk.allFinite()) break;
-    if (change <= options.tolerance * Hk.stableNorm()) {
+    if (change <= options.tolerance) {
       converged = true;
       break;
     }
@@ -168,23 +250,22 @@ DareResult solveDare(const MatX& A, const MatX& B, const MatX& Q, const MatX& R,
       << " iterations (closed loop marginally stable: check stabilizability and detectability)";
     throw Error(s.str());
   }
-  result.P = std::move(Hk);
-  const MatX BtP = B.transpose() * result.P;
-  result.K = (R + BtP * B).ldlt().solve(BtP * A);
+  const MatX& Pb = Hk;
+  const MatX BtP = Bb.transpose() * Pb;
+  const MatX Kb = (R + BtP * Bb).ldlt().solve(BtP * Ab);
 
-  // Own verification: residual, symmetry/PSD of P, and a stabilizing closed loop.
-  result.relative_residual = dareRelativeResidual(A, B, Q, R, result.P);
+  // Own verification (in balanced units): residual, symmetry/PSD of P, and a stabilizing closed loop.
+  result.relative_residual = dareRelativeResidual(Ab, Bb, Qb, R, Pb);
   if (!(result.relative_residual <= options.max_relative_residual)) {
     std::ostringstream s;
     s << "DARE: solution failed its residual check (relative residual " << result.relative_residual << " > "
       << options.max_relative_residual << ")";
     throw Error(s.str());
   }
-  const double p_min =
-      Eigen::SelfAdjointEigenSolver<MatX>(result.P, Eigen::EigenvaluesOnly).eigenvalues().minCoeff();
-  if (p_min < -1e-9 * std::max(result.P.stableNorm(), 1.0))
+  const double p_min = Eigen::SelfAdjointEigenSolver<MatX>(Pb, Eigen::EigenvaluesOnly).eigenvalues().minCoeff();
+  if (p_min < -1e-9 * std::max(Pb.stableNorm(), 1.0))
     throw Error("DARE: solution is not positive semidefinite (the pair is not stabilizable or not detectable)");
-  const MatX closed = A - B * result.K;
+  const MatX closed = Ab - Bb * Kb;
   result.closed_loop_spectral_radius = Eigen::EigenSolver<MatX>(closed, false).eigenvalues().cwiseAbs().maxCoeff();
   if (!(result.closed_loop_spectral_radius < 1.0)) {
     std::ostringstream s;
@@ -192,6 +273,8 @@ DareResult solveDare(const MatX& A, const MatX& B, const MatX& Q, const MatX& R,
       << "); (A, B) is not stabilizable or (A, Q) not detectable";
     throw Error(s.str());
   }
+  result.P = d_inv.asDiagonal() * Pb * d_inv.asDiagonal();
+  result.K = Kb * d_inv.asDiagonal();
   return result;
 }
 

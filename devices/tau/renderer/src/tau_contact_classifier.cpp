@@ -24,9 +24,9 @@ constexpr double kTrackForce = 0.05;  // N
 constexpr double kHoldForce = 0.5;  // N
 // The normal turns toward the application's force (friction removed) with these gains per new
 // force. Along the proxy's path (a surface curving under a sliding proxy): kPathGain, 20 ms, which
-// lags a tool sliding at 15 mm/s over a 15 mm radius by 1 deg. Otherwise: kSlowGain, 200 ms, so a
-// tool rocking across a concave edge does not swing the wall with it (the faces' forces across the
-// wall's normal are rendered by the spring meanwhile) and the proxy's jitter averages out. While
+// lags a tool sliding at 15 mm/s over a 15 mm radius by 1 deg. Across the path: kSlowGain, 200 ms,
+// so the proxy's jitter averages out. A proxy with no path (stuck, or in a concave edge, whose
+// faces' forces across the wall's normal the spring renders) does not turn it at all. While
 // probing, before the wall holds anything: kProbeGain, 10 ms.
 constexpr double kPathGain = 0.05;
 constexpr double kSlowGain = 0.005;
@@ -128,8 +128,11 @@ void TauContactClassifier::trackSurface(const Vec3& force, const Vec3& position,
   // Friction: CHAI3D's finger proxy, slipping, sits on its friction cone's rim on the way to the
   // tool, so its tangential force points against its own motion, which lies in the surface (normal
   // to it). F's component along the path is that friction and is removed; what is left is normal to
-  // the path, as the surface normal is. A stuck proxy's F is tilted by at most atan(mu_s), and only
-  // the slow gain turns the normal toward it.
+  // the path, as the surface normal is.
+  // A proxy that has not moved kChord while the wall owns the contact is stuck (static friction,
+  // or a concave edge): the surface under it is not changing, and its force's direction is its pull
+  // on the tool (up to the friction cone's rim, or toward the other face), so the normal stays.
+  if (state_ == State::kLqr && path.isZero()) return;
   const Vec3 normal_force = force - force.dot(path) * path;
   const double length = normal_force.norm();
   if (!(length > 0.0)) return;

@@ -14,6 +14,10 @@
 // cheap enough to redesign near the 1 ms servo period. Because SDA's preconditions are not checked by the iteration itself, we
 // check them explicitly (Hautus/PBH tests on the eigenvalues outside the open unit disc), verify the
 // residual and the closed loop afterwards, and throw uhaptics::Error rather than return a wrong P.
+// All of this runs in balanced state units: a power-of-two diagonal scaling that minimizes the norms
+// of A (off-diagonal), B R^-1 B^T and Q together, so the rank tests, the stopping rule and the
+// checks give the same verdict whatever units the caller's states are in (a rank test in raw units
+// refuses an integrator coupled to the input through a 1e-8 static gain as "not stabilizable").
 #include <string>
 
 #include "uhaptics/core/types.hpp"
@@ -22,8 +26,8 @@ namespace uhaptics {
 
 struct DareOptions {
   int max_iterations = 100;
-  double tolerance = 1e-13;          // relative change of P between doublings that stops SDA
-  double max_relative_residual = 1e-8;  // accepted |residual|_F / (|Q|_F + |A^T P A|_F)
+  double tolerance = 1e-13;          // stops SDA: max |dP_ij| / sqrt(P_ii P_jj) between doublings
+  double max_relative_residual = 1e-8;  // accepted |residual|_F / (|Q|_F + |A^T P A|_F), balanced units
   double rank_tolerance = 1e-10;     // PBH rank test: sigma_min < tol * scale means rank loss
   bool check_preconditions = true;   // stabilizability of (A, B), detectability of (A, Q)
 };
@@ -32,7 +36,7 @@ struct DareResult {
   MatX P;                      // stabilizing solution, symmetric positive semidefinite
   MatX K;                      // optimal gain (R + B^T P B)^-1 B^T P A
   int iterations = 0;          // doublings used
-  double relative_residual = 0.0;
+  double relative_residual = 0.0;  // in the balanced state units (see above)
   double closed_loop_spectral_radius = 0.0;  // max |eig(A - B K)| (< 1 for a stabilizing P)
 };
 
@@ -44,8 +48,9 @@ DareResult solveDare(const MatX& A, const MatX& B, const MatX& Q, const MatX& R,
 /// |P - (A^T P A - A^T P B (R + B^T P B)^-1 B^T P A + Q)|_F / (|Q|_F + |A^T P A|_F).
 double dareRelativeResidual(const MatX& A, const MatX& B, const MatX& Q, const MatX& R, const MatX& P);
 
-/// The Hautus tests (also used by the DARE's precondition check). On failure `why` says which
-/// eigenvalue is uncontrollable/unobservable.
+/// The Hautus tests, in the units given (solveDare calls them on its balanced A, B, Q). B's columns
+/// and Q's diagonal are normalized first (input and output units do not matter). On failure `why`
+/// says which eigenvalue is uncontrollable/unobservable.
 bool isStabilizable(const MatX& A, const MatX& B, double rank_tolerance = 1e-10, std::string* why = nullptr);
 bool isDetectable(const MatX& A, const MatX& Q, double rank_tolerance = 1e-10, std::string* why = nullptr);
 

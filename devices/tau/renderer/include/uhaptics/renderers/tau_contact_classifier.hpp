@@ -26,10 +26,12 @@
 // kHoldForce / k (0.5 N's depth) under the proxy, at most 50 mm/s along its normal; so a held tool
 // stays just inside the application's surface and its force keeps saying where that surface is. The
 // normal turns toward the application's force: along the proxy's path as fast as a surface curving
-// under a sliding proxy demands, otherwise slowly (200 ms), so that a tool rocking across a concave
-// edge does not swing the wall with it. Friction does not tilt the normal: a slipping proxy's
-// tangential force points against its own motion, which lies in the surface, so F's component along
-// the proxy's path is removed first. Held with no force from the application (the plane above the
+// under a sliding proxy demands, across it slowly (200 ms). A proxy that has not moved 0.5 mm (stuck
+// by static friction, or in a concave edge) leaves the normal where it is: the surface under it is
+// not changing, and its force's direction is only its pull on the tool, so a tool rocking across a
+// concave edge or dragging a stuck proxy does not swing the wall with it. Friction does not tilt the
+// normal: a slipping proxy's tangential force points against its own motion, which lies in the
+// surface, so F's component along the proxy's path is removed first. Held with no force from the application (the plane above the
 // real surface, past the crest of a convex shape), the plane sinks at 10 mm/s.
 //
 // Release (hysteresis, so a contact does not flip at the tick rate): the wall stops holding as soon
