@@ -1,11 +1,12 @@
 #include "uhaptics/core/lqr_design.hpp"
 
-#include <Eigen/Eigenvalues>
+#include <Eigen/LU>
 #include <catch2/catch.hpp>
 #include <cmath>
 #include <cstdlib>
 #include <vector>
 
+#include "uhaptics/core/eigenvalues.hpp"
 #include "uhaptics/core/fault.hpp"
 
 using namespace uhaptics;
@@ -95,11 +96,6 @@ TEST_CASE("Full LQR-with-integrator design on a scalar mass: gain and fastest po
       Catch::Contains("Q must be 3x3"));
 }
 
-namespace {
-double spectralRadius(const MatX& A) {
-  return Eigen::EigenSolver<MatX>(A, false).eigenvalues().cwiseAbs().maxCoeff();
-}
-}  // namespace
 
 TEST_CASE("Input-delay augmentation: closed form for a scalar plant and a stable delayed loop") {
   // x+ = a x + b u_{k-1}: state (x, u_{k-1}), A = [[a, b], [0, 0]], B = [0; 1].
@@ -176,7 +172,7 @@ double kroneckerMsRadius(const std::vector<MatX>& F, const std::vector<double>& 
   for (std::size_t i = 0; i < F.size(); ++i)
     for (Eigen::Index r = 0; r < n; ++r)
       for (Eigen::Index c = 0; c < n; ++c) M.block(r * n, c * n, n, n) += p[i] * F[i](r, c) * F[i];
-  return Eigen::EigenSolver<MatX>(M, false).eigenvalues().cwiseAbs().maxCoeff();
+  return spectralRadius(M);
 }
 
 // Expected cost E sum_k (z^T Q z + u^T R u + 2 z^T N u) of u = -K z from z0, by the exact

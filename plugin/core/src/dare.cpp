@@ -8,6 +8,7 @@
 #include <complex>
 #include <sstream>
 
+#include "uhaptics/core/eigenvalues.hpp"
 #include "uhaptics/core/fault.hpp"
 
 namespace uhaptics {
@@ -40,15 +41,15 @@ MatX normalizedColumns(const MatX& M) {
 // X is given with unit-norm columns, so the threshold is relative to max(1, |A|).
 bool hautus(const MatX& A, const MatX& X, double rank_tolerance, const char* what, std::string* why) {
   const Eigen::Index n = A.rows();
-  Eigen::EigenSolver<MatX> eig(A, false);
-  if (eig.info() != Eigen::Success) {
+  Eigen::VectorXcd eigenvalues;
+  if (!generalEigenvalues(A, eigenvalues)) {
     if (why) *why = "eigenvalues of A could not be computed";
     return false;
   }
   const double scale = std::max(1.0, A.stableNorm());
   MatC stacked(n + X.cols(), n);
   for (Eigen::Index k = 0; k < n; ++k) {
-    const Complex lambda = eig.eigenvalues()(k);
+    const Complex lambda = eigenvalues(k);
     // Marginal modes (|z| = 1: integrators, rigid-body modes) must be checked too; allow for the
     // rounding of a computed eigenvalue.
     if (std::abs(lambda) < 1.0 - 1e-9) continue;
@@ -266,7 +267,7 @@ DareResult solveDare(const MatX& A, const MatX& B, const MatX& Q, const MatX& R,
   if (p_min < -1e-9 * std::max(Pb.stableNorm(), 1.0))
     throw Error("DARE: solution is not positive semidefinite (the pair is not stabilizable or not detectable)");
   const MatX closed = Ab - Bb * Kb;
-  result.closed_loop_spectral_radius = Eigen::EigenSolver<MatX>(closed, false).eigenvalues().cwiseAbs().maxCoeff();
+  result.closed_loop_spectral_radius = spectralRadius(closed);
   if (!(result.closed_loop_spectral_radius < 1.0)) {
     std::ostringstream s;
     s << "DARE: the gain does not stabilize the plant (spectral radius " << result.closed_loop_spectral_radius

@@ -1,7 +1,6 @@
 #include "uhaptics/core/lqr_design.hpp"
 
 #include <Eigen/Cholesky>
-#include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
 #include <complex>
@@ -9,6 +8,7 @@
 #include <sstream>
 #include <unsupported/Eigen/MatrixFunctions>
 
+#include "uhaptics/core/eigenvalues.hpp"
 #include "uhaptics/core/fault.hpp"
 #include "uhaptics/core/finite_difference.hpp"
 
@@ -102,7 +102,8 @@ StateSpace augmentWithInputDelay(const StateSpace& d, int delay_samples) {
 }
 
 double fastestPoleRadPerSecond(const MatX& A_closed_loop, double period) {
-  const auto z = Eigen::EigenSolver<MatX>(A_closed_loop, false).eigenvalues();
+  Eigen::VectorXcd z;
+  if (!generalEigenvalues(A_closed_loop, z)) return std::numeric_limits<double>::quiet_NaN();
   double fastest = 0.0;
   for (Eigen::Index i = 0; i < z.size(); ++i) {
     // z = exp(s T): |s| = |ln z| / T (a pole at z = 0 would be infinitely fast: cap at Nyquist-free value).

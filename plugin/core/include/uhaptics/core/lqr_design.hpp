@@ -118,7 +118,8 @@ struct LqrDesignRequest {
 /// Full redesign: linearize + augment + discretize (+ delay states) + DARE + gain. Throws uhaptics::Error.
 LqrDesign designLqrWithIntegrators(const LqrDesignRequest& request);
 
-/// Fastest pole in rad/s of the discrete closed loop A - B K: max |ln z| / T.
+/// Fastest pole in rad/s of the discrete closed loop A - B K: max |ln z| / T (NaN when its
+/// eigenvalues cannot be computed).
 double fastestPoleRadPerSecond(const MatX& A_closed_loop, double period);
 
 }  // namespace uhaptics
