@@ -49,9 +49,12 @@ uh_build() {
   uh_configure "$dir" "$@"
   cmake --build "$dir" -j "$UH_JOBS"
 }
+# ccache, when installed, caches compiles across build trees and branches (not installed by these
+# scripts: a fresh clone gains nothing from an empty cache).
 uh_configure() {
   local dir="$1"; shift
-  local generator=()
+  local generator=() launcher=()
   [ -f "$dir/CMakeCache.txt" ] || generator=(-G Ninja)
-  cmake -S "$UH_ROOT" -B "$dir" "${generator[@]}" -DCMAKE_BUILD_TYPE=Release "${UH_CHAI3D_ARGS[@]}" "$@"
+  command -v ccache >/dev/null 2>&1 && launcher=(-DCMAKE_CXX_COMPILER_LAUNCHER=ccache)
+  cmake -S "$UH_ROOT" -B "$dir" "${generator[@]}" -DCMAKE_BUILD_TYPE=Release "${launcher[@]}" "${UH_CHAI3D_ARGS[@]}" "$@"
 }
