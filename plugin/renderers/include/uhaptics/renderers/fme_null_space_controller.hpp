@@ -34,6 +34,7 @@
 #include "uhaptics/core/limits.hpp"
 #include "uhaptics/core/null_space.hpp"
 #include "uhaptics/core/saturation_observer.hpp"
+#include "uhaptics/models/planar_linkage_model.hpp"
 
 namespace uhaptics {
 
@@ -144,24 +145,7 @@ class FmeNullSpaceController {
   /// from the model when it has them (none otherwise; see setJointLimits). Throws
   /// uhaptics::Error on invalid limits, a singular home configuration or invalid options.
   FmeNullSpaceController(const Model& model, const JointVector& torque_limits, const JointVector& home,
-                         const Options& options = {})
-      : model_(model), limits_(torque_limits) {
-    if (!limits_.allFinite() || !(limits_.minCoeff() > 0.0))
-      throw Error("FME controller: torque limits must be finite and positive");
-    if constexpr (kHasJointLimits<Model>) {
-      if (setJointLimits(model_.jointLimits()) != Fault::kNone) throw Error("FME controller: invalid joint limits");
-    }
-    inv_limits_sq_ = fme::inverseSquaredLimits(limits_);
-    Mat<M, N> J;
-    model_.jacobian(home, J);
-    if (!home.allFinite() || !fme::weightedFme(J, inv_limits_sq_, home_fme_, 1e-9))
-      throw Error("FME controller: the home configuration is singular (no force manipulability ellipsoid)");
-    if (setOptions(options) != Fault::kNone)
-      throw Error("FME controller: invalid options (gains must be finite and >= 0, mu > 0, thresholds in "
-                  "[0, 1] with eps1 <= eps2, a non-zero motion direction, max_null_space_torque > 0, "
-                  "null_space_ramp_time and stiff_direction_time finite and >= 0)");
-    reset();
-  }
+                         const Options& options = {});
 
   /// Validates and applies options (allowed between ticks, e.g. from a GUI). On invalid options
   /// returns Fault::kInvalidParameter and keeps the previous ones.
@@ -223,95 +207,7 @@ class FmeNullSpaceController {
 
   /// One servo tick at time t [s]: joint state (q, q_dot), requested end-effector force F.
   /// Writes tau (always finite, |tau_i| <= T_i) and returns the fault (also in status()).
-  Fault tick(double t, const JointVector& q, const JointVector& qd, const TaskVector& F, JointVector& tau) noexcept {
-    tau.setZero();
-    status_.skipped_contact_work = false;
-    if (!std::isfinite(t) || !q.allFinite() || !qd.allFinite() || !F.allFinite())
-      return finish(Fault::kNonFiniteInput, tau, false);
-    model_.jacobian(q, J_);
-    if (!J_.allFinite()) return finish(Fault::kNonFiniteResult, tau, false);
-
-    // Primary task, scaled into the torque box keeping the force direction.
-    const bool contact = F.norm() > options_.contact_force_threshold;
-    if (!contact && options_.mode != FmeEllipsoidMode::kStiff && transition_.settledFree()) {
-      // Free motion, nothing near saturation: no observer, scaling, stiff ellipsoid or blend.
-      status_.skipped_contact_work = true;
-      status_.observer = 1.0;
-      status_.alpha = 1.0;
-      status_.force.setZero();
-      status_.tau_primary.setZero();
-      desired_ = free_fme_;
-    } else {
-      status_.tau_primary.noalias() = J_.transpose() * F;
-      status_.observer = saturationObserver(status_.tau_primary, limits_, options_.observer_shape);
-      status_.alpha = scaleIntoBox(status_.tau_primary, limits_);
-      status_.force = status_.alpha * F;
-      // The stiff ellipsoid's major axis follows the contact force, except while the blend back to
-      // the free one runs: that starts when the force has fallen (V >= eps2), and as it vanishes
-      // (a proxy leaving a surface) its direction is undefined and can turn through 180 deg within
-      // a few ticks, which swept the desired ellipsoid round and stepped the null-space torque by
-      // up to 6.9 N m per tick (CHAI3D cursor released from a mesh, tests/chai3d).
-      const bool leaving_stiff = transition_.target() == 1.0 && transition_.inProgress();
-      if (contact && !leaving_stiff) {
-        followContactDirection(t, F);
-        fme::axisAlignedEllipsoid(stiff_direction_, major_, minor_, stiff_fme_);
-      }
-      updateDesired(t);
-    }
-    tau = status_.tau_primary;
-
-    // Secondary task in the null space. Failure here leaves the primary task alone.
-    if (!fme::fmeCostGradient(model_, q, J_, inv_limits_sq_, desired_, options_.gradient, status_.cost, grad_,
-                              options_.min_inverse_condition)) {
-      TaskMatrix unused;  // failure path only: tell a singular arm from an undefined cost
-      const bool singular = !fme::weightedFme(J_, inv_limits_sq_, unused, options_.min_inverse_condition);
-      return finish(singular ? Fault::kSingular : Fault::kInvalidParameter, tau, true);
-    }
-    // The mass matrix: for the dynamically consistent inverse and the limit brake (identity, in
-    // kg m^2, for a model without one).
-    if constexpr (kHasMassMatrix<Model>) {
-      model_.massMatrix(q, mass_);
-    } else {
-      mass_.setIdentity();
-    }
-    Eigen::LLT<Mat<N, N>> llt(mass_);
-    const bool mass_valid = llt.info() == Eigen::Success;
-    if (mass_valid) {
-      mass_inv_ = llt.solve(Mat<N, N>::Identity());
-    } else if (options_.dynamically_consistent) {
-      return finish(Fault::kInvalidParameter, tau, true);
-    } else {
-      mass_inv_.setIdentity();  // kinematic projector: the mass matrix only sizes the limit brake
-    }
-    const bool projected = options_.dynamically_consistent
-                               ? nullSpaceProjector(J_, mass_inv_, projector_)
-                               : nullSpaceProjector(J_, Mat<N, N>(Mat<N, N>::Identity()), projector_);
-    if (!projected) return finish(Fault::kSingular, tau, true);
-    const JointVector tau_s = -options_.beta * grad_ - options_.damping * qd;
-    status_.tau_null_command.noalias() = projector_ * tau_s;
-    status_.tau_limit_command.setZero();
-    if (has_joint_limits_ && options_.limit_gain > 0.0) {
-      jointLimitGradient(joint_limits_, q, options_.limit_margin, limit_grad_);
-      limit_grad_ *= -options_.limit_gain;
-      if (options_.limit_speed > 0.0) addLimitBrake(q, qd, limit_grad_);
-      status_.tau_limit_command.noalias() = projector_ * limit_grad_;
-      status_.tau_null_command += status_.tau_limit_command;
-    }
-    // The envelope (ramp and norm bound), then keep the primary task intact: shrink tau_N until
-    // every joint is within its limit. Each is one scale of the whole vector: the FME and
-    // joint-limit terms shrink together, so where they balance (the settled configuration near a
-    // limit) they still do.
-    status_.null_space_ramp = rampAt(t);
-    const double command_norm = status_.tau_null_command.norm();
-    status_.null_space_bound_scale =
-        command_norm > options_.max_null_space_torque ? options_.max_null_space_torque / command_norm : 1.0;
-    status_.tau_null = (status_.null_space_ramp * status_.null_space_bound_scale) * status_.tau_null_command;
-    const double gamma = fitIntoLimits(tau, status_.tau_null);
-    status_.tau_null *= gamma;
-    tau += status_.tau_null;
-    status_.null_space_scale = gamma;
-    return finish(Fault::kNone, tau, true);
-  }
+  Fault tick(double t, const JointVector& q, const JointVector& qd, const TaskVector& F, JointVector& tau) noexcept;
 
   const Status& status() const noexcept { return status_; }
   const Options& options() const noexcept { return options_; }
@@ -444,5 +340,124 @@ class FmeNullSpaceController {
   Mat<N, N> mass_ = Mat<N, N>::Identity(), mass_inv_, projector_, mobility_;
   static constexpr double kMinNullMobility = 0.01;  // limit brake: share of the unconstrained mobility
 };
+
+template <class Model>
+FmeNullSpaceController<Model>::FmeNullSpaceController(const Model& model, const JointVector& torque_limits,
+                                                      const JointVector& home, const Options& options)
+    : model_(model), limits_(torque_limits) {
+  if (!limits_.allFinite() || !(limits_.minCoeff() > 0.0))
+    throw Error("FME controller: torque limits must be finite and positive");
+  if constexpr (kHasJointLimits<Model>) {
+    if (setJointLimits(model_.jointLimits()) != Fault::kNone) throw Error("FME controller: invalid joint limits");
+  }
+  inv_limits_sq_ = fme::inverseSquaredLimits(limits_);
+  Mat<M, N> J;
+  model_.jacobian(home, J);
+  if (!home.allFinite() || !fme::weightedFme(J, inv_limits_sq_, home_fme_, 1e-9))
+    throw Error("FME controller: the home configuration is singular (no force manipulability ellipsoid)");
+  if (setOptions(options) != Fault::kNone)
+    throw Error("FME controller: invalid options (gains must be finite and >= 0, mu > 0, thresholds in "
+                "[0, 1] with eps1 <= eps2, a non-zero motion direction, max_null_space_torque > 0, "
+                "null_space_ramp_time and stiff_direction_time finite and >= 0)");
+  reset();
+}
+
+template <class Model>
+Fault FmeNullSpaceController<Model>::tick(double t, const JointVector& q, const JointVector& qd, const TaskVector& F,
+                                          JointVector& tau) noexcept {
+  tau.setZero();
+  status_.skipped_contact_work = false;
+  if (!std::isfinite(t) || !q.allFinite() || !qd.allFinite() || !F.allFinite())
+    return finish(Fault::kNonFiniteInput, tau, false);
+  model_.jacobian(q, J_);
+  if (!J_.allFinite()) return finish(Fault::kNonFiniteResult, tau, false);
+
+  // Primary task, scaled into the torque box keeping the force direction.
+  const bool contact = F.norm() > options_.contact_force_threshold;
+  if (!contact && options_.mode != FmeEllipsoidMode::kStiff && transition_.settledFree()) {
+    // Free motion, nothing near saturation: no observer, scaling, stiff ellipsoid or blend.
+    status_.skipped_contact_work = true;
+    status_.observer = 1.0;
+    status_.alpha = 1.0;
+    status_.force.setZero();
+    status_.tau_primary.setZero();
+    desired_ = free_fme_;
+  } else {
+    status_.tau_primary.noalias() = J_.transpose() * F;
+    status_.observer = saturationObserver(status_.tau_primary, limits_, options_.observer_shape);
+    status_.alpha = scaleIntoBox(status_.tau_primary, limits_);
+    status_.force = status_.alpha * F;
+    // The stiff ellipsoid's major axis follows the contact force, except while the blend back to
+    // the free one runs: that starts when the force has fallen (V >= eps2), and as it vanishes
+    // (a proxy leaving a surface) its direction is undefined and can turn through 180 deg within
+    // a few ticks, which swept the desired ellipsoid round and stepped the null-space torque by
+    // up to 6.9 N m per tick (CHAI3D cursor released from a mesh, tests/chai3d).
+    const bool leaving_stiff = transition_.target() == 1.0 && transition_.inProgress();
+    if (contact && !leaving_stiff) {
+      followContactDirection(t, F);
+      fme::axisAlignedEllipsoid(stiff_direction_, major_, minor_, stiff_fme_);
+    }
+    updateDesired(t);
+  }
+  tau = status_.tau_primary;
+
+  // Secondary task in the null space. Failure here leaves the primary task alone.
+  if (!fme::fmeCostGradient(model_, q, J_, inv_limits_sq_, desired_, options_.gradient, status_.cost, grad_,
+                            options_.min_inverse_condition)) {
+    TaskMatrix unused;  // failure path only: tell a singular arm from an undefined cost
+    const bool singular = !fme::weightedFme(J_, inv_limits_sq_, unused, options_.min_inverse_condition);
+    return finish(singular ? Fault::kSingular : Fault::kInvalidParameter, tau, true);
+  }
+  // The mass matrix: for the dynamically consistent inverse and the limit brake (identity, in
+  // kg m^2, for a model without one).
+  if constexpr (kHasMassMatrix<Model>) {
+    model_.massMatrix(q, mass_);
+  } else {
+    mass_.setIdentity();
+  }
+  Eigen::LLT<Mat<N, N>> llt(mass_);
+  const bool mass_valid = llt.info() == Eigen::Success;
+  if (mass_valid) {
+    mass_inv_ = llt.solve(Mat<N, N>::Identity());
+  } else if (options_.dynamically_consistent) {
+    return finish(Fault::kInvalidParameter, tau, true);
+  } else {
+    mass_inv_.setIdentity();  // kinematic projector: the mass matrix only sizes the limit brake
+  }
+  const bool projected = options_.dynamically_consistent
+                             ? nullSpaceProjector(J_, mass_inv_, projector_)
+                             : nullSpaceProjector(J_, Mat<N, N>(Mat<N, N>::Identity()), projector_);
+  if (!projected) return finish(Fault::kSingular, tau, true);
+  const JointVector tau_s = -options_.beta * grad_ - options_.damping * qd;
+  status_.tau_null_command.noalias() = projector_ * tau_s;
+  status_.tau_limit_command.setZero();
+  if (has_joint_limits_ && options_.limit_gain > 0.0) {
+    jointLimitGradient(joint_limits_, q, options_.limit_margin, limit_grad_);
+    limit_grad_ *= -options_.limit_gain;
+    if (options_.limit_speed > 0.0) addLimitBrake(q, qd, limit_grad_);
+    status_.tau_limit_command.noalias() = projector_ * limit_grad_;
+    status_.tau_null_command += status_.tau_limit_command;
+  }
+  // The envelope (ramp and norm bound), then keep the primary task intact: shrink tau_N until
+  // every joint is within its limit. Each is one scale of the whole vector: the FME and
+  // joint-limit terms shrink together, so where they balance (the settled configuration near a
+  // limit) they still do.
+  status_.null_space_ramp = rampAt(t);
+  const double command_norm = status_.tau_null_command.norm();
+  status_.null_space_bound_scale =
+      command_norm > options_.max_null_space_torque ? options_.max_null_space_torque / command_norm : 1.0;
+  status_.tau_null = (status_.null_space_ramp * status_.null_space_bound_scale) * status_.tau_null_command;
+  const double gamma = fitIntoLimits(tau, status_.tau_null);
+  status_.tau_null *= gamma;
+  tau += status_.tau_null;
+  status_.null_space_scale = gamma;
+  return finish(Fault::kNone, tau, true);
+}
+
+// The shipped planar linkages' controllers are compiled once, in fme_null_space_controller.cpp: the
+// constructor and the tick, defined out of the class for that reason, are the controller's heavy
+// part (its fixed-size decompositions), and every renderer, scene, tool and test uses them.
+extern template class FmeNullSpaceController<PlanarLinkageModel<3>>;
+extern template class FmeNullSpaceController<PlanarLinkageModel<4>>;
 
 }  // namespace uhaptics
