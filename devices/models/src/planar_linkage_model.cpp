@@ -116,6 +116,28 @@ void PlanarLinkageModel<N>::jacobianDerivative(const JointVector& q, int k, Jaco
 }
 
 template <int N>
+void PlanarLinkageModel<N>::forwardAndJacobian(const JointVector& q, TaskVector& x, Jacobian& J) const noexcept {
+  JointVector c, s;
+  linkAngles(q, c, s);
+  x = p_.base;
+  x(0) += p_.link_length.dot(c);
+  x(1) += p_.link_length.dot(s);
+  J.row(0) = -(p_.link_length.cwiseProduct(s)).transpose() * p_.coupling;
+  J.row(1) = (p_.link_length.cwiseProduct(c)).transpose() * p_.coupling;
+}
+
+template <int N>
+void PlanarLinkageModel<N>::jacobianDerivatives(const JointVector& q, std::array<Jacobian, N>& dJ) const noexcept {
+  JointVector c, s;
+  linkAngles(q, c, s);
+  for (int k = 0; k < N; ++k) {
+    const JointVector w = p_.link_length.cwiseProduct(p_.coupling.col(k));  // d_i a_ik
+    dJ[static_cast<std::size_t>(k)].row(0) = -(w.cwiseProduct(c)).transpose() * p_.coupling;
+    dJ[static_cast<std::size_t>(k)].row(1) = -(w.cwiseProduct(s)).transpose() * p_.coupling;
+  }
+}
+
+template <int N>
 void PlanarLinkageModel<N>::massMatrix(const JointVector& q, MassMatrix& M) const noexcept {
   JointVector c, s;
   linkAngles(q, c, s);

@@ -101,8 +101,8 @@ class cMyCustomDeviceAccess : public cMyCustomDevice {
   /// Copies what the base classes answer from members out of a_device's own answers. Allocates
   /// nothing (the haptic loop calls it).
   static void mirror(cMyCustomDevice& a_slot, cUhapticsDevice& a_device) {
-    a_device.getLinearVelocity(a_slot.*(&cMyCustomDeviceAccess::m_linearVelocity));
-    a_device.getAngularVelocity(a_slot.*(&cMyCustomDeviceAccess::m_angularVelocity));
+    a_device.getVelocities(a_slot.*(&cMyCustomDeviceAccess::m_linearVelocity),
+                           a_slot.*(&cMyCustomDeviceAccess::m_angularVelocity));
     a_device.getGripperAngularVelocity(a_slot.*(&cMyCustomDeviceAccess::m_gripperAngularVelocity));
     a_device.getForce(a_slot.*(&cMyCustomDeviceAccess::m_prevForce));
     a_device.getTorque(a_slot.*(&cMyCustomDeviceAccess::m_prevTorque));

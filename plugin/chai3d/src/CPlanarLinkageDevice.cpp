@@ -132,8 +132,7 @@ void cPlanarLinkageDevice<N>::updateState() noexcept {
   // Kinematics of the latest joint reading.
   uhaptics::Vec2 x;
   typename Model::Jacobian J;
-  m_model->forward(m_q, x);
-  m_model->jacobian(m_q, J);
+  m_model->forwardAndJacobian(m_q, x, J);
   m_state.position = planarToDevice(x - m_centre);
   m_state.linearVelocity = planarToDevice(J * m_qd);
   m_state.joints = m_q;

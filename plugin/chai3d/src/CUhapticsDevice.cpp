@@ -306,6 +306,13 @@ bool cUhapticsDevice::getAngularVelocity(cVector3d& a_angularVelocity) {
   return m_deviceReady;
 }
 
+bool cUhapticsDevice::getVelocities(cVector3d& a_linearVelocity, cVector3d& a_angularVelocity) {
+  std::lock_guard<std::mutex> lock(m_mutex);
+  a_linearVelocity = m_linearVelocity = toChai(m_state.linearVelocity);
+  a_angularVelocity = m_angularVelocity = toChai(m_state.angularVelocity);
+  return m_deviceReady;
+}
+
 bool cUhapticsDevice::getJointAnglesRad(double a_jointAnglesRad[C_MAX_DOF]) {
   std::lock_guard<std::mutex> lock(m_mutex);
   for (int i = 0; i < C_MAX_DOF; ++i) a_jointAnglesRad[i] = i < m_state.joints.size() ? m_state.joints(i) : 0.0;

@@ -73,16 +73,18 @@ const RendererFigure* SessionStatsSnapshot::figure(const std::string& name) cons
 }
 
 void SessionStats::recordTick(double commanded_force, double output_magnitude, bool fault) noexcept {
-  ticks_.fetch_add(1, std::memory_order_relaxed);
+  // Single writer: a plain load and store per counter, no locked read-modify-write. faults_ is
+  // also counted by recordFault() from the application's thread: it keeps its atomic add.
+  ticks_.store(ticks_.load(std::memory_order_relaxed) + 1, std::memory_order_relaxed);
   if (fault) faults_.fetch_add(1, std::memory_order_relaxed);
   if (!std::isfinite(commanded_force)) return;  // counted as a fault by the caller
   if (!in_contact_ && commanded_force > threshold_) {
     in_contact_ = true;
-    contacts_.fetch_add(1, std::memory_order_relaxed);
+    contacts_.store(contacts_.load(std::memory_order_relaxed) + 1, std::memory_order_relaxed);
   } else if (in_contact_ && commanded_force < 0.5 * threshold_) {
     in_contact_ = false;
   }
-  if (in_contact_) contact_ticks_.fetch_add(1, std::memory_order_relaxed);
+  if (in_contact_) contact_ticks_.store(contact_ticks_.load(std::memory_order_relaxed) + 1, std::memory_order_relaxed);
   in_contact_now_.store(in_contact_, std::memory_order_relaxed);
   // Single writer: plain load/store keeps the maxima exact without a compare-exchange loop.
   if (commanded_force > peak_force_.load(std::memory_order_relaxed)) {

@@ -81,6 +81,17 @@ uhaptics::Vec2 cExoFingerDevice::fingertip(const Model::TaskVector& a_x) const n
   return points.fingertip;
 }
 
+uhaptics::Mat2 cExoFingerDevice::fingertipJacobian(const Model::TaskVector& a_x) const noexcept {
+  // fingertip = L_p u(q_MCP) + L_m u(q_MCP + q_PIP), u(a) = (cos a, sin a): differentiated in closed form.
+  const uhaptics::ExoFingerGeometry& g = m_model->geometry();
+  const double a = a_x(0), b = a_x(0) + a_x(1);
+  const uhaptics::Vec2 distal = g.middle_length * uhaptics::Vec2(-std::sin(b), std::cos(b));
+  uhaptics::Mat2 J;
+  J.col(0) = g.proximal_length * uhaptics::Vec2(-std::sin(a), std::cos(a)) + distal;
+  J.col(1) = distal;
+  return J;
+}
+
 void cExoFingerDevice::updateState(double a_dt) noexcept {
   // Hand frame (x distal) -> device y-z plane, see the class comment.
   const uhaptics::Vec3 position = planarToDevice(m_data.points.fingertip - m_centre);
@@ -140,9 +151,7 @@ uhaptics::Fault cExoFingerDevice::render(const ServoInput& a_input, double* a_ef
   const uhaptics::Vec2 f_hand = deviceToPlanar(a_input.force);
   const bool pulled = !f_hand.isZero(0.0);
   uhaptics::Mat2 Jtip = uhaptics::Mat2::Zero();  // d fingertip / d x, hand frame; only with a command
-  if (pulled || !m_fingerTorqueCommand.isZero(0.0)) {
-    Jtip = uhaptics::centralDifferenceJacobian([&](const uhaptics::Vec2& y) { return fingertip(y); }, m_data.x);
-  }
+  if (pulled || !m_fingerTorqueCommand.isZero(0.0)) Jtip = fingertipJacobian(m_data.x);
   Model::TaskVector x_proxy = m_data.x;
   if (pulled) x_proxy += (Jtip.transpose() * f_hand) / m_couplingStiffness;
   x_proxy += m_fingerTorqueCommand / m_couplingStiffness;  // multi-point tools' joint torque
@@ -151,7 +160,8 @@ uhaptics::Fault cExoFingerDevice::render(const ServoInput& a_input, double* a_ef
   // free space (no force, no joint torque) the proxy is the probe and every solve is skipped.
   const bool solves = !(x_proxy - m_data.x).isZero(0.0) && x_proxy.allFinite() && m_data.q.allFinite() &&
                       m_data.in_range && m_data.x.allFinite() && m_data.J.allFinite();
-  const uhaptics::Fault fault = m_renderer->tick(m_data.q, x_proxy, m_actuator);
+  // The sensed state's kinematics (sense()) are the renderer's: it evaluates the model only to solve.
+  const uhaptics::Fault fault = m_renderer->tick(m_data.q, x_proxy, m_data.x, m_data.J, m_data.in_range, m_actuator);
   const double magnitude = std::abs(m_actuator(0));
   if (solves) {
     sessionStats().count(m_figureSolves);

@@ -13,7 +13,6 @@ namespace {
 constexpr double kPi = 3.14159265358979323846;
 
 Vec2 unit(double angle) noexcept { return {std::cos(angle), std::sin(angle)}; }
-Vec2 unitDerivative(double angle) noexcept { return {-std::sin(angle), std::cos(angle)}; }
 Vec2 rotate(double angle, const Vec2& v) noexcept {
   const double c = std::cos(angle), s = std::sin(angle);
   return {c * v.x() - s * v.y(), s * v.x() + c * v.y()};
@@ -21,9 +20,13 @@ Vec2 rotate(double angle, const Vec2& v) noexcept {
 double cross(const Vec2& a, const Vec2& b) noexcept { return a.x() * b.y() - a.y() * b.x(); }
 // acos continued by clamping: beyond the assembly region the closure is held at its limit.
 double clampedAcos(double c) noexcept { return std::acos(std::clamp(c, -1.0, 1.0)); }
-// The representative of angle nearest to centre (angles from atan2 may come out 2 pi away).
+// The representative of angle nearest to centre (angles from atan2 may come out 2 pi away). Within
+// pi of centre std::remainder returns its argument exactly, so the library call is needed only
+// beyond that.
 double wrapNear(double angle, double centre) noexcept {
-  return centre + std::remainder(angle - centre, 2.0 * kPi);
+  const double offset = angle - centre;
+  if (std::abs(offset) <= kPi) return centre + offset;
+  return centre + std::remainder(offset, 2.0 * kPi);
 }
 }  // namespace
 
@@ -53,6 +56,9 @@ ExoFingerModel ExoFingerModel::fromParams(const ParamFile& p) {
   g.actuator_arm_angle = p.number("linkage/actuator_arm_angle", -2.0 * kPi, 2.0 * kPi);
   g.actuator_base = p.vector<2>("linkage/actuator_base", -0.3, 0.3);
   if (g.actuator_base.norm() < 0.01) p.fail("'linkage/actuator_base' must be at least 10 mm from the MCP axis");
+  m.base_angle_ = std::atan2(g.actuator_base.y(), g.actuator_base.x());
+  m.base_norm_ = g.actuator_base.norm();
+  m.base_squared_norm_ = g.actuator_base.squaredNorm();
   const long mode = p.integer("linkage/four_bar_mode", -1, 1);
   if (mode == 0) p.fail("'linkage/four_bar_mode' must be +1 or -1 (the four-bar's assembly mode)");
   m.rocker_branch_ = static_cast<double>(mode);
@@ -147,10 +153,10 @@ double ExoFingerModel::actuatorLength(double mcp, double phi) const noexcept {
 
 double ExoFingerModel::mcpFromActuator(double l, double phi) const noexcept {
   const Vec2 C = actuatorPin(phi);
-  const Vec2& A = geometry_.actuator_base;
   // |R C - A|^2 = l^2  <=>  A . R C = |A||C| cos(mcp + angle(C) - angle(A)) = (|C|^2 + |A|^2 - l^2) / 2
-  const double k = (C.squaredNorm() + A.squaredNorm() - l * l) / (2.0 * A.norm() * C.norm());
-  const double mcp = std::atan2(A.y(), A.x()) - std::atan2(C.y(), C.x()) + mcp_branch_ * clampedAcos(k);
+  // (A's norm and angle are constants of the geometry, computed at load).
+  const double k = (C.squaredNorm() + base_squared_norm_ - l * l) / (2.0 * base_norm_ * C.norm());
+  const double mcp = base_angle_ - std::atan2(C.y(), C.x()) + mcp_branch_ * clampedAcos(k);
   return wrapNear(mcp, 0.5 * (task_lower_(0) + task_upper_(0)));
 }
 
@@ -160,22 +166,35 @@ void ExoFingerModel::forward(const JointVector& q, TaskVector& x) const noexcept
 }
 
 void ExoFingerModel::jacobian(const JointVector& q, Jacobian& J) const noexcept {
+  TaskVector x;
+  forward(q, x);
+  jacobian(q, x, J);
+}
+
+void ExoFingerModel::jacobian(const JointVector& q, const TaskVector& x, Jacobian& J) const noexcept {
   const auto& g = geometry_;
   const double phi = q(1);
   const double l = q(0);
+  // Each angle's sine and cosine once: unit() and unitDerivative() of the same angle share them.
+  const Vec2 u_phi = unit(phi);
+  const Vec2 du_phi(-u_phi.y(), u_phi.x());
   // PIP row, implicit differentiation of |E - D|^2 = c^2 with D = B + a u(phi), E = P + d u(psi).
-  const double psi = pipFromRocker(phi) + g.output_crank_angle;
-  const Vec2 D = g.rocker_pivot + g.rocker_length * unit(phi);
-  const Vec2 E = Vec2(g.proximal_length, 0.0) + g.output_crank_length * unit(psi);
+  const double psi = x(1) + g.output_crank_angle;
+  const Vec2 u_psi = unit(psi);
+  const Vec2 du_psi(-u_psi.y(), u_psi.x());
+  const Vec2 D = g.rocker_pivot + g.rocker_length * u_phi;
+  const Vec2 E = Vec2(g.proximal_length, 0.0) + g.output_crank_length * u_psi;
   const Vec2 e = E - D;
-  const double dpsi_dphi =
-      (g.rocker_length * e.dot(unitDerivative(phi))) / (g.output_crank_length * e.dot(unitDerivative(psi)));
+  const double dpsi_dphi = (g.rocker_length * e.dot(du_phi)) / (g.output_crank_length * e.dot(du_psi));
   // MCP row, implicit differentiation of |R(mcp) C(phi) - A|^2 = l^2.
-  const double mcp = mcpFromActuator(l, phi);
-  const Vec2 RC = rotate(mcp, actuatorPin(phi));
+  const double mcp = x(0);
+  const double c = std::cos(mcp), s = std::sin(mcp);
+  const auto rotated = [c, s](const Vec2& v) { return Vec2(c * v.x() - s * v.y(), s * v.x() + c * v.y()); };
+  const Vec2 u_arm = unit(phi + g.actuator_arm_angle);
+  const Vec2 RC = rotated(g.rocker_pivot + g.actuator_arm_length * u_arm);  // R(mcp) actuatorPin(phi)
   const Vec2 v = RC - g.actuator_base;
   const double dh_dmcp = cross(RC, v);  // v . (d/dmcp R C) = v . perp(R C)
-  const Vec2 RdC = rotate(mcp, g.actuator_arm_length * unitDerivative(phi + g.actuator_arm_angle));
+  const Vec2 RdC = rotated(g.actuator_arm_length * Vec2(-u_arm.y(), u_arm.x()));
   J(0, 0) = l / dh_dmcp;
   J(0, 1) = -v.dot(RdC) / dh_dmcp;
   J(1, 0) = 0.0;
@@ -210,23 +229,27 @@ bool ExoFingerModel::taskInRange(const TaskVector& x, double tol) const noexcept
          (x.array() <= task_upper_.array() + tol).all();
 }
 
-bool ExoFingerModel::inWorkingRange(const JointVector& q, double tol) const noexcept {
+bool ExoFingerModel::jointsInRange(const JointVector& q, double tol) const noexcept {
   // Both joints: the rocker too, since outside its range the four-bar can map q_B to an in-range
   // PIP angle on another branch (a reading that is no configuration of this finger).
-  if (!q.allFinite() || (q.array() < joint_limits_.lower.array() - tol).any() ||
-      (q.array() > joint_limits_.upper.array() + tol).any())
-    return false;
+  return q.allFinite() && !(q.array() < joint_limits_.lower.array() - tol).any() &&
+         !(q.array() > joint_limits_.upper.array() + tol).any();
+}
+
+bool ExoFingerModel::inWorkingRange(const JointVector& q, double tol) const noexcept {
+  if (!jointsInRange(q, tol)) return false;
   TaskVector x;
   forward(q, x);
   return taskInRange(x, tol);
 }
 
 void ExoFingerModel::forward(const JointVector& q, ExoFingerData& data) const noexcept {
+  // The closures once: the Jacobian and the range check reuse x = f(q).
   data.q = q;
   forward(q, data.x);
-  jacobian(q, data.J);
+  jacobian(q, data.x, data.J);
   points(data.x, data.points);
-  data.in_range = inWorkingRange(q);
+  data.in_range = jointsInRange(q, 1e-9) && taskInRange(data.x, 1e-9);
 }
 
 }  // namespace uhaptics

@@ -243,7 +243,8 @@ uhaptics::Fault cTauDevice::render(const ServoInput& a_input, double* a_efforts)
     // last commanded (m_tau, the application's spring included while the LQR is not engaged), not
     // only its own share, so the spring's force is not mistaken for the user's push.
     const uhaptics::SurfaceContact& surface = m_classifier.surface();
-    const uhaptics::WallCommand& wall = m_lqr->tick(m_q, surface, &m_data->pose, &m_tau);
+    // sense() solved the forward kinematics of m_q (m_senseFault is kNone): the wall reuses them.
+    const uhaptics::WallCommand& wall = m_lqr->tick(m_q, surface, *m_data, &m_tau);
     fault = wall.fault;
     m_tau = wall.torque;
     m_classifier.wallTicked(wall);

@@ -32,7 +32,16 @@ const WallCommand& LqrWallRenderer::fail(Fault f) noexcept {
 
 const WallCommand& LqrWallRenderer::tick(const Vec6& q, const SurfaceContact& contact, const Vec6* pose,
                                          const Vec6* applied) noexcept {
-  const Fault f = front_.update(q, contact, pose);
+  return tickFrom(front_.update(q, contact, pose), q, contact, applied);
+}
+
+const WallCommand& LqrWallRenderer::tick(const Vec6& q, const SurfaceContact& contact, const TauData& solved,
+                                         const Vec6* applied) noexcept {
+  return tickFrom(front_.update(q, contact, solved), q, contact, applied);
+}
+
+const WallCommand& LqrWallRenderer::tickFrom(Fault f, const Vec6& q, const SurfaceContact& contact,
+                                             const Vec6* applied) noexcept {
   if (f != Fault::kNone) return fail(f);
   const TauData& data = front_.data();
   // The observer runs in free space too, so the velocity estimate is settled at contact entry.

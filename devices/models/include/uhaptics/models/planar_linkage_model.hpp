@@ -79,6 +79,10 @@ class PlanarLinkageModel {
   void forward(const JointVector& q, TaskVector& x) const noexcept;
   void jacobian(const JointVector& q, Jacobian& J) const noexcept;
   void jacobianDerivative(const JointVector& q, int k, Jacobian& dJ) const noexcept;
+  /// forward() and jacobian() together, and every jacobianDerivative() together: the same values,
+  /// the link angles' sines and cosines computed once.
+  void forwardAndJacobian(const JointVector& q, TaskVector& x, Jacobian& J) const noexcept;
+  void jacobianDerivatives(const JointVector& q, std::array<Jacobian, N>& dJ) const noexcept;
   void massMatrix(const JointVector& q, MassMatrix& M) const noexcept;
   /// Coriolis and centrifugal torques c(q, q_dot) (M q_ddot + c = tau).
   void velocityProductTorque(const JointVector& q, const JointVector& qd, JointVector& c) const noexcept;

@@ -69,6 +69,9 @@ class cUhapticsDevice : public cGenericHapticDevice {
   virtual bool getLinearVelocity(cVector3d& a_linearVelocity);
   virtual bool getAngularVelocity(cVector3d& a_angularVelocity);
   virtual bool getJointAnglesRad(double a_jointAnglesRad[C_MAX_DOF]);
+  /// getLinearVelocity() and getAngularVelocity() in one call (one lock): CHAI3D's custom-device
+  /// slot copies both after every call it forwards.
+  bool getVelocities(cVector3d& a_linearVelocity, cVector3d& a_angularVelocity);
   /// None of the uhaptics devices has a gripper: angle and angular velocity are 0.
   virtual bool getGripperAngleRad(double& a_angle);
   virtual bool getGripperAngularVelocity(double& a_gripperAngularVelocity);

@@ -13,13 +13,15 @@ namespace uhaptics::fme {
 
 enum class GradientMethod { kAnalytic, kFiniteDifference };
 
-/// dJ[k] = dJ/dq_k for every joint: the model's own derivative when it has one, else central
-/// differences of jacobian().
+/// dJ[k] = dJ/dq_k for every joint: the model's own derivatives when it has them (all at once
+/// when it offers that), else central differences of jacobian().
 template <class Model>
 void jacobianDerivatives(const Model& model, const Vec<Model::kJoints>& q,
                          std::array<Mat<Model::kTask, Model::kJoints>, Model::kJoints>& dJ) noexcept {
   constexpr int N = Model::kJoints;
-  if constexpr (kHasJacobianDerivative<Model>) {
+  if constexpr (kHasJacobianDerivatives<Model>) {
+    model.jacobianDerivatives(q, dJ);
+  } else if constexpr (kHasJacobianDerivative<Model>) {
     for (int k = 0; k < N; ++k) model.jacobianDerivative(q, k, dJ[k]);
   } else {
     Vec<N> qh = q;

@@ -3,6 +3,10 @@
 // interface. Renderers use them when present and fall back otherwise:
 //
 //   void jacobianDerivative(const JointVector& q, int k, Jacobian& dJ) const noexcept;  // dJ/dq_k
+//   void jacobianDerivatives(const JointVector& q, std::array<Jacobian, kJoints>& dJ) const noexcept;
+//                                   // every dJ/dq_k at once (shares the work the single ones repeat)
+//   void jacobian(const JointVector& q, const TaskVector& x, Jacobian& J) const noexcept; // J at q,
+//                                   // given x = forward(q) (for a model whose J needs f(q) first)
 //   void massMatrix(const JointVector& q, Mat<kJoints, kJoints>& M) const noexcept;   // joint space
 //   const JointLimits<kJoints>& jointLimits() const noexcept;                          // mechanical limits
 //   bool inWorkingRange(const JointVector& q) const noexcept;                         // q is a real state
@@ -12,6 +16,7 @@
 // inWorkingRange every finite q counts as a real state (models whose forward() continues outside
 // the assembly region, like the exoskeleton's, must offer it so that renderers refuse such states
 // instead of rendering from a fictitious configuration).
+#include <array>
 #include <type_traits>
 #include <utility>
 
@@ -28,6 +33,25 @@ struct HasJacobianDerivative<M, std::void_t<decltype(std::declval<const M&>().ja
                                     std::declval<Mat<M::kTask, M::kJoints>&>()))>> : std::true_type {};
 template <typename M>
 inline constexpr bool kHasJacobianDerivative = HasJacobianDerivative<M>::value;
+
+template <typename M, typename = void>
+struct HasJacobianDerivatives : std::false_type {};
+template <typename M>
+struct HasJacobianDerivatives<M, std::void_t<decltype(std::declval<const M&>().jacobianDerivatives(
+                                     std::declval<const Vec<M::kJoints>&>(),
+                                     std::declval<std::array<Mat<M::kTask, M::kJoints>, M::kJoints>&>()))>>
+    : std::true_type {};
+template <typename M>
+inline constexpr bool kHasJacobianDerivatives = HasJacobianDerivatives<M>::value;
+
+template <typename M, typename = void>
+struct HasJacobianFromForward : std::false_type {};
+template <typename M>
+struct HasJacobianFromForward<M, std::void_t<decltype(std::declval<const M&>().jacobian(
+                                     std::declval<const Vec<M::kJoints>&>(), std::declval<const Vec<M::kTask>&>(),
+                                     std::declval<Mat<M::kTask, M::kJoints>&>()))>> : std::true_type {};
+template <typename M>
+inline constexpr bool kHasJacobianFromForward = HasJacobianFromForward<M>::value;
 
 template <typename M, typename = void>
 struct HasMassMatrix : std::false_type {};

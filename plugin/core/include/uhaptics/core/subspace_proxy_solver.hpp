@@ -19,6 +19,7 @@
 
 #include "uhaptics/core/fault.hpp"
 #include "uhaptics/core/kinematic_model.hpp"
+#include "uhaptics/core/model_capabilities.hpp"
 #include "uhaptics/core/regularized_solve.hpp"
 #include "uhaptics/core/types.hpp"
 
@@ -67,7 +68,12 @@ SubspaceSolveReport solveSubspaceProxy(const Model& model, const Vec<Model::kTas
 
   if (opt.method == LeastSquaresMethod::kGaussNewton) {
     while (rep.iterations < opt.max_iterations) {
-      model.jacobian(q, J);
+      // x = f(q) here (the start, or the accepted step's evaluation): a model that can reuse it does.
+      if constexpr (kHasJacobianFromForward<Model>) {
+        model.jacobian(q, x, J);
+      } else {
+        model.jacobian(q, J);
+      }
       RegularizedSolveInfo info;
       const Vec<N> dq = regularizedSolve(J, r, opt.regularization, &info);
       ++rep.iterations;

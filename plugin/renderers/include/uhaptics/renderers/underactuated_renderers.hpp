@@ -112,6 +112,36 @@ class UnderactuatedRendererBase {
 
   /// One servo period: tau_a for device state q and proxy x_proxy. Zero tau_a on any fault.
   Fault tick(const JointVector& q, const TaskVector& x_proxy, ActuatorVector& tau_a) noexcept {
+    return tickFrom(
+        q, x_proxy, tau_a,
+        [&] {
+          if constexpr (kHasWorkingRange<Model>) return model_.inWorkingRange(q);
+          return true;
+        },
+        [&](TaskVector& probe) { model_.forward(q, probe); }, [&](Mat<T, N>& J) { model_.jacobian(q, J); });
+  }
+  /// The same tick from the kinematics the caller already evaluated at q, for a caller that keeps
+  /// them anyway (a device's sensed state): probe = f(q), J = df/dq and in_range = the model's
+  /// inWorkingRange(q) (true for a model without one). The model is then evaluated only by a solve.
+  Fault tick(const JointVector& q, const TaskVector& x_proxy, const TaskVector& probe, const Mat<T, N>& J,
+             bool in_range, ActuatorVector& tau_a) noexcept {
+    return tickFrom(
+        q, x_proxy, tau_a, [in_range] { return in_range; }, [&](TaskVector& x) { x = probe; },
+        [&](Mat<T, N>& J_out) { J_out = J; });
+  }
+
+  /// Theoretical displayed impedance d tau / d q (N x N, tau = S^T tau_a) at the latest tick.
+  Mat<N, N> displayedImpedance() const { return derived().theoreticalImpedance(); }
+
+  const Diagnostics& last() const noexcept { return d_; }
+  const Gains& gains() const noexcept { return gains_; }
+  const Model& model() const noexcept { return model_; }
+
+ private:
+  // tick(): the checks in order, with the kinematics supplied by the three callables.
+  template <class InRange, class Forward, class Jacobian>
+  Fault tickFrom(const JointVector& q, const TaskVector& x_proxy, ActuatorVector& tau_a, InRange&& inRange,
+                 Forward&& forward, Jacobian&& jacobian) noexcept {
     tau_a.setZero();
     d_.clamped = false;
     d_.free_space = false;
@@ -119,13 +149,11 @@ class UnderactuatedRendererBase {
     if (!q.allFinite() || !x_proxy.allFinite()) return fail(Fault::kNonFiniteInput);
     // A reading outside the mechanism's working range (a glitch, a miscalibrated sensor) is no
     // configuration at all: the model's forward() there is only a continuation, so render nothing.
-    if constexpr (kHasWorkingRange<Model>) {
-      if (!model_.inWorkingRange(q)) return fail(Fault::kOutOfRange);
-    }
-    model_.forward(q, d_.probe);
+    if (!inRange()) return fail(Fault::kOutOfRange);
+    forward(d_.probe);
     if (!d_.probe.allFinite()) return fail(Fault::kNonFiniteResult);
     const TaskVector dx = x_proxy - d_.probe;
-    model_.jacobian(q, d_.J);
+    jacobian(d_.J);
     if (!d_.J.allFinite()) return fail(Fault::kSingular);
     if (dx.isZero(0.0)) {  // free space: nothing to render, skip every solve
       d_.free_space = true;
@@ -142,13 +170,6 @@ class UnderactuatedRendererBase {
     d_.fault = Fault::kNone;
     return Fault::kNone;
   }
-
-  /// Theoretical displayed impedance d tau / d q (N x N, tau = S^T tau_a) at the latest tick.
-  Mat<N, N> displayedImpedance() const { return derived().theoreticalImpedance(); }
-
-  const Diagnostics& last() const noexcept { return d_; }
-  const Gains& gains() const noexcept { return gains_; }
-  const Model& model() const noexcept { return model_; }
 
  protected:
   // Shared guard for methods that invert J: rank lost (not merely ill-conditioned) is a fault.

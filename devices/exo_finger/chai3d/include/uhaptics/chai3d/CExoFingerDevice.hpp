@@ -82,6 +82,8 @@ class cExoFingerDevice : public cUhapticsDevice {
   using Model = uhaptics::ExoFingerModel;
   using Renderer = uhaptics::NonlinearSubspaceRenderer<Model>;
   uhaptics::Vec2 fingertip(const Model::TaskVector& a_x) const noexcept;
+  /// d fingertip / d x (hand frame), in closed form.
+  uhaptics::Mat2 fingertipJacobian(const Model::TaskVector& a_x) const noexcept;
   /// m_state from m_data (finger assembled at the latest joint reading).
   void updateState(double a_dt) noexcept;
 

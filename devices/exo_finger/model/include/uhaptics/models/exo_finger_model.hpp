@@ -71,6 +71,8 @@ class ExoFingerModel {
   // (finite, continuous); inWorkingRange() says whether q is a real configuration.
   void forward(const JointVector& q, TaskVector& x) const noexcept;
   void jacobian(const JointVector& q, Jacobian& J) const noexcept;
+  /// The same Jacobian at q when x = forward(q) is already known (solvers reuse their evaluation).
+  void jacobian(const JointVector& q, const TaskVector& x, Jacobian& J) const noexcept;
   const Selection& selection() const noexcept { return selection_; }
   /// Fills data for state q: forward kinematics, Jacobian, points and range flag. Allocation-free.
   void forward(const JointVector& q, ExoFingerData& data) const noexcept;
@@ -108,6 +110,8 @@ class ExoFingerModel {
   double mcpFromActuator(double l, double phi) const noexcept;
   double actuatorLength(double mcp, double phi) const noexcept;
   Vec2 actuatorPin(double phi) const noexcept;  // C, proximal-phalanx frame
+  // The joint stops of inWorkingRange() (without the finger's ranges).
+  bool jointsInRange(const JointVector& q, double tol) const noexcept;
 
   ExoFingerGeometry geometry_;
   Selection selection_ = (Selection() << 1.0, 0.0).finished();
@@ -118,6 +122,8 @@ class ExoFingerModel {
   double board_rate_hz_ = 0.0, host_rate_hz_ = 0.0, force_loop_tau_ = 0.0;
   // Assembly modes (+1 / -1) of the two law-of-cosines closures, fixed at load.
   double pip_branch_ = 1.0, rocker_branch_ = 1.0, mcp_branch_ = 1.0;
+  // The actuator base A's angle, norm and squared norm (hand frame), for mcpFromActuator().
+  double base_angle_ = 0.0, base_norm_ = 0.0, base_squared_norm_ = 0.0;
   std::string origin_;
 };
 

@@ -43,6 +43,10 @@ class LqrWallRenderer {
   /// observer then infers it from the delay model, see LqrJointRegulator::observe).
   const WallCommand& tick(const Vec6& q, const SurfaceContact& contact, const Vec6* pose = nullptr,
                           const Vec6* applied = nullptr) noexcept;
+  /// The same tick from forward kinematics the caller already solved for q (TauModel::forward(q,
+  /// solved) returned kNone; pose and Jacobian are used as they are, e.g. a device's sensed state).
+  const WallCommand& tick(const Vec6& q, const SurfaceContact& contact, const TauData& solved,
+                          const Vec6* applied = nullptr) noexcept;
   const WallCommand& command() const noexcept { return cmd_; }
   const Vec6& reference() const noexcept { return reference_; }
   const Vec6& integralState() const noexcept { return regulator_.integral(); }
@@ -50,6 +54,8 @@ class LqrWallRenderer {
 
  private:
   const WallCommand& fail(Fault f) noexcept;
+  // tick() after the front end's update returned f.
+  const WallCommand& tickFrom(Fault f, const Vec6& q, const SurfaceContact& contact, const Vec6* applied) noexcept;
   TauServoFrontEnd front_;
   LqrJointRegulator regulator_;
   Options options_;

@@ -33,6 +33,9 @@ class TauServoFrontEnd {
   void reset() noexcept;
   /// Returns kNone or the fault that forces a zero command.
   Fault update(const Vec6& q, const SurfaceContact& contact, const Vec6* pose) noexcept;
+  /// The same from forward kinematics the caller already solved for q (TauModel::forward(q, solved)
+  /// returned kNone): its pose and Jacobian are taken as they are, the model is not evaluated again.
+  Fault update(const Vec6& q, const SurfaceContact& contact, const TauData& solved) noexcept;
   const TauModel& model() const noexcept { return model_; }
   TauData& data() noexcept { return data_; }
   const Vec6& q() const noexcept { return q_; }
@@ -42,6 +45,8 @@ class TauServoFrontEnd {
   double signedDistance(const SurfaceContact& c) const noexcept { return c.normal.dot(data_.pose.head<3>() - c.point); }
 
  private:
+  // The checks and the velocity estimate both update() share; false: kNonFiniteInput.
+  bool acceptInputs(const Vec6& q, const SurfaceContact& contact) noexcept;
   const TauModel& model_;
   TauData data_;
   Vec6 q_ = Vec6::Zero(), qd_ = Vec6::Zero();
