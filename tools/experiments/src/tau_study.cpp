@@ -80,11 +80,18 @@ RunMetrics simulateRun(const TauModel& model, const LqrWallGains& gains, const R
   // whole 1 s ramp of the hand force).
   const double impact_end = disturbance_start + (hand ? 1.0 : 0.3);
   Vec3 hand_p = start_pose.head<3>(), hand_v = Vec3::Zero();
+  Vec6 fk_q = Vec6::Zero();
+  Fault fk = Fault::kNone;
   for (int k = 0; k < steps; ++k) {
     const double t = k * T;
     // Environment: flat wall z = 0, contact reported within the band (proxy on the surface).
     const Vec6& q_meas = sim.encoderReading();
-    const Fault fk = model.forward(q_meas, device);
+    // The quantized reading often repeats (a held tool); forward() from the previous solution would
+    // return the same pose and fault.
+    if (k == 0 || q_meas != fk_q) {
+      fk = model.forward(q_meas, device);
+      fk_q = q_meas;
+    }
     contact.active = fk == Fault::kNone && device.pose(2) <= params.contact_band;
     contact.point = Vec3(device.pose(0), device.pose(1), 0.0);
     const Vec6* pose = fk == Fault::kNone ? &device.pose : nullptr;
