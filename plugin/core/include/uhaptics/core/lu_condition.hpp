@@ -10,7 +10,6 @@
 // a lower bound of the true norm, so its rcond() is at least the true one. A bound above twice the
 // threshold (margin for rounding) therefore decides "above"; otherwise rcond() itself decides.
 #include <Eigen/LU>
-#include <algorithm>
 #include <cmath>
 
 #include "uhaptics/core/types.hpp"
@@ -28,8 +27,9 @@ double rcondLowerBound(const Eigen::PartialPivLU<MatrixType>& lu) noexcept {
     double col_l = 1.0, col_u = 0.0;  // L has a unit diagonal
     for (Eigen::Index i = 0; i <= j; ++i) col_u += std::abs(LU(i, j));
     for (Eigen::Index i = j + 1; i < n; ++i) col_l += std::abs(LU(i, j));
-    norm_l = std::max(norm_l, col_l);
-    norm_u = std::max(norm_u, col_u);
+    // Written so that a NaN propagates (std::max would drop it).
+    if (!(col_l <= norm_l)) norm_l = col_l;
+    if (!(col_u <= norm_u)) norm_u = col_u;
   }
   // C(U)^T y = 1 (lower triangular) and C(L)^T z = 1 (unit upper triangular); y, z >= 0.
   Eigen::Matrix<double, MatrixType::RowsAtCompileTime, 1, 0, MatrixType::MaxRowsAtCompileTime, 1> y(n), z(n);
@@ -38,13 +38,13 @@ double rcondLowerBound(const Eigen::PartialPivLU<MatrixType>& lu) noexcept {
     double s = 1.0;
     for (Eigen::Index j = 0; j < i; ++j) s += std::abs(LU(j, i)) * y(j);
     y(i) = s / std::abs(LU(i, i));
-    inv_u = std::max(inv_u, y(i));
+    if (!(y(i) <= inv_u)) inv_u = y(i);
   }
   for (Eigen::Index i = n - 1; i >= 0; --i) {
     double s = 1.0;
     for (Eigen::Index j = i + 1; j < n; ++j) s += std::abs(LU(j, i)) * z(j);
     z(i) = s;
-    inv_l = std::max(inv_l, z(i));
+    if (!(z(i) <= inv_l)) inv_l = z(i);
   }
   return 1.0 / (norm_l * norm_u * inv_u * inv_l);
 }
