@@ -73,6 +73,10 @@ int main(int argc, char** argv) {
   double delay_release = -1.0;
   app.add_option("--delay-release-distance", delay_release,
                  "LQR release height above the wall (m) in the delay variants (default: hold while the environment reports the contact)");
+  int substeps = 0;
+  app.add_option("--substeps", substeps,
+                 "plant integration substeps per servo period in the grid runs (default: the parameter file's)")
+      ->check(CLI::Range(1, 1000));
   bool ideal_encoders = false;
   app.add_flag("--ideal-encoders", ideal_encoders, "ideal joint sensors instead of 4096-count encoders (all variants)");
   CLI11_PARSE(app, argc, argv);
@@ -129,6 +133,7 @@ int main(int argc, char** argv) {
     grid_options.quantize = !ideal_encoders;
     grid_options.applied_torque_known = !applied_unknown;
     grid_options.delay_release_distance = delay_release;
+    grid_options.substeps = substeps;
     const std::size_t jobs = static_cast<std::size_t>(grid * grid) * static_cast<std::size_t>(runs);
     tools::Progress progress("tau-study", jobs);
     const auto t0 = std::chrono::steady_clock::now();

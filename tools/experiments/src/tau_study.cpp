@@ -38,6 +38,7 @@ RunMetrics simulateRun(const TauModel& model, const LqrWallGains& gains, const R
   SimulatedTauOptions so;
   so.max_delay_samples = spec.max_delay_samples;
   so.quantize = spec.quantize;
+  so.substeps = spec.substeps;
   so.seed = spec.seed ^ 0x9e3779b97f4a7c15ULL;
   so.tool_damping = spec.controller == Controller::kSpring ? params.device_damping : 0.0;
   so.tool_rotational_damping = spec.controller == Controller::kSpring ? params.device_rotational_damping : 0.0;
@@ -283,6 +284,7 @@ GridStudy runGrid(const TauModel& model, const LqrWallGains& gains, const LqrWal
       spec.quantize = options.quantize;
       spec.lqr_release_distance = variants[v].delay > 0 ? options.delay_release_distance : -1.0;
       spec.applied_torque_known = options.applied_torque_known;
+      spec.substeps = options.substeps;
       results[job * kNumVariants + v] = simulateRun(model, variants[v].delay > 0 ? delay_gains : gains, spec);
     }
     if (job_done) job_done();
