@@ -3,6 +3,7 @@
 // Default: 3 x 3 query points x 4 runs (seconds); --full: 11 x 11 x 20 as in the paper.
 #include <CLI/CLI.hpp>
 #include <chrono>
+#include <ctime>
 #include <algorithm>
 #include <cstdio>
 #include <string>
@@ -72,6 +73,10 @@ int main(int argc, char** argv) {
   double delay_release = -1.0;
   app.add_option("--delay-release-distance", delay_release,
                  "LQR release height above the wall (m) in the delay variants (default: hold while the environment reports the contact)");
+  int substeps = 0;
+  app.add_option("--substeps", substeps,
+                 "plant integration substeps per servo period in the grid runs (default: the parameter file's)")
+      ->check(CLI::Range(1, 1000));
   bool ideal_encoders = false;
   app.add_flag("--ideal-encoders", ideal_encoders, "ideal joint sensors instead of 4096-count encoders (all variants)");
   CLI11_PARSE(app, argc, argv);
@@ -128,12 +133,15 @@ int main(int argc, char** argv) {
     grid_options.quantize = !ideal_encoders;
     grid_options.applied_torque_known = !applied_unknown;
     grid_options.delay_release_distance = delay_release;
+    grid_options.substeps = substeps;
     const std::size_t jobs = static_cast<std::size_t>(grid * grid) * static_cast<std::size_t>(runs);
     tools::Progress progress("tau-study", jobs);
     const auto t0 = std::chrono::steady_clock::now();
+    const std::clock_t cpu0 = std::clock();  // process CPU time, all threads
     const GridStudy study = runGrid(model, gains, delay_gains, grid_options, [&] { progress.advance(); });
     progress.finish();
     const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    const double cpu = static_cast<double>(std::clock() - cpu0) / CLOCKS_PER_SEC;
     const double simulated = static_cast<double>(study.simulated_runs) * 3.0;
 
     // Per query point statistics, CSV for the heat maps.
@@ -161,8 +169,10 @@ int main(int argc, char** argv) {
     for (std::size_t v = 0; v < kNumVariants; ++v)
       std::printf("  %-13s faults %3d / %zu, max penetration %.3f mm\n", variants[v].label, study.variant_faults[v], jobs,
                   1e3 * study.max_penetration[v]);
-    std::printf("wall time %.2f s on %u threads: %.0f simulated seconds per second\n", wall,
-                threads ? threads : experiments::hardwareThreads(), simulated / wall);
+    std::printf("wall time %.2f s on %u threads: %.0f simulated seconds per second; CPU %.1f s (%.1f us per "
+                "simulated servo period)\n",
+                wall, threads ? threads : experiments::hardwareThreads(), simulated / wall, cpu,
+                1e6 * cpu / (simulated / model.servoPeriod()));
 
     // One trace per controller at the centre (Fig. 8/9 style) and the heat maps (Fig. 10, 12, 13).
     for (const Scenario sc : {Scenario::kStepForce, Scenario::kHand}) {

@@ -38,6 +38,7 @@ RunMetrics simulateRun(const TauModel& model, const LqrWallGains& gains, const R
   SimulatedTauOptions so;
   so.max_delay_samples = spec.max_delay_samples;
   so.quantize = spec.quantize;
+  so.substeps = spec.substeps;
   so.seed = spec.seed ^ 0x9e3779b97f4a7c15ULL;
   so.tool_damping = spec.controller == Controller::kSpring ? params.device_damping : 0.0;
   so.tool_rotational_damping = spec.controller == Controller::kSpring ? params.device_rotational_damping : 0.0;
@@ -80,11 +81,18 @@ RunMetrics simulateRun(const TauModel& model, const LqrWallGains& gains, const R
   // whole 1 s ramp of the hand force).
   const double impact_end = disturbance_start + (hand ? 1.0 : 0.3);
   Vec3 hand_p = start_pose.head<3>(), hand_v = Vec3::Zero();
+  Vec6 fk_q = Vec6::Zero();
+  Fault fk = Fault::kNone;
   for (int k = 0; k < steps; ++k) {
     const double t = k * T;
     // Environment: flat wall z = 0, contact reported within the band (proxy on the surface).
     const Vec6& q_meas = sim.encoderReading();
-    const Fault fk = model.forward(q_meas, device);
+    // The quantized reading often repeats (a held tool); forward() from the previous solution would
+    // return the same pose and fault.
+    if (k == 0 || q_meas != fk_q) {
+      fk = model.forward(q_meas, device);
+      fk_q = q_meas;
+    }
     contact.active = fk == Fault::kNone && device.pose(2) <= params.contact_band;
     contact.point = Vec3(device.pose(0), device.pose(1), 0.0);
     const Vec6* pose = fk == Fault::kNone ? &device.pose : nullptr;
@@ -276,6 +284,7 @@ GridStudy runGrid(const TauModel& model, const LqrWallGains& gains, const LqrWal
       spec.quantize = options.quantize;
       spec.lqr_release_distance = variants[v].delay > 0 ? options.delay_release_distance : -1.0;
       spec.applied_torque_known = options.applied_torque_known;
+      spec.substeps = options.substeps;
       results[job * kNumVariants + v] = simulateRun(model, variants[v].delay > 0 ? delay_gains : gains, spec);
     }
     if (job_done) job_done();

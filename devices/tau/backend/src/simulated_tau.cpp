@@ -70,12 +70,17 @@ Fault SimulatedTau::step(const Vec6& tau_command, const Vec3& external_force) no
   // data_ holds the forward kinematics at q_ from reset()/the previous step.
   Fault f = model_.computeDynamicsTerms(q_, qd_, data_);
   if (f != Fault::kNone) return f;
+  // The plant terms are frozen over the period, so the substeps only need M^-1 applied to the
+  // drive and to the force directions: factorize and solve once, then matrix-vector products.
   const Eigen::LLT<Mat6> mass(data_.M);
   const Mat<3, 6> Jp = data_.J.topRows<3>();
   const Mat<3, 6> Jr = data_.J.bottomRows<3>();
   const Vec3 p0 = data_.pose.head<3>();
   const Vec6 q0 = q_;
-  const Vec6 drive = applied_ - data_.bias - data_.gravity;
+  const Vec6 qdd_drive = mass.solve(applied_ - data_.bias - data_.gravity);
+  const Mat<6, 3> force_to_qdd = mass.solve(Jp.transpose());
+  // Rotational damping: a generalized force -b Jr^T (Euler-angle rates), dissipative by construction.
+  const Mat6 rotational_damping = -options_.tool_rotational_damping * mass.solve(Jr.transpose()) * Jr;
   const double T = model_.servoPeriod();
   const double dt = T / options_.substeps;
   Vec6 q = q_, qd = qd_;
@@ -92,9 +97,7 @@ Fault SimulatedTau::step(const Vec6& tau_command, const Vec3& external_force) no
       hand_sum += fh;
       force += fh;
     }
-    // Rotational damping: a generalized force -b * (Euler-angle rates), dissipative by construction.
-    const Vec3 moment = -options_.tool_rotational_damping * (Jr * qd);
-    const Vec6 qdd = mass.solve(drive + Jp.transpose() * force + Jr.transpose() * moment);
+    const Vec6 qdd = qdd_drive + force_to_qdd * force + rotational_damping * qd;
     qd += dt * qdd;  // semi-implicit Euler: velocity first
     q += dt * qd;
   }
@@ -107,8 +110,12 @@ Fault SimulatedTau::step(const Vec6& tau_command, const Vec3& external_force) no
     hand_v_ += hand_a_ * T;
   }
   time_ += T;
-  // Keep pose/J current for observers (warm-started, usually 1-2 Newton iterations).
+  // Keep pose/J current for observers, Newton warm-started from the first-order prediction
+  // X + J dq (usually one iteration).
+  const Vec6 pose_before = data_.pose;
+  data_.pose.noalias() += data_.J * (q_ - q0);
   f = model_.forward(q_, data_);
+  if (f != Fault::kNone) data_.pose = pose_before;  // pose() stays the last solution
   quantize();
   return f;
 }

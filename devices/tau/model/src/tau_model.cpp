@@ -5,6 +5,7 @@
 #include <cmath>
 #include <sstream>
 
+#include "uhaptics/core/lu_condition.hpp"
 #include "uhaptics/models/param_file.hpp"
 
 namespace uhaptics {
@@ -21,7 +22,7 @@ Fault solvePose(const TauKinematics& kin, const Vec6& q, double tol, int max_ite
     residual = data.g.cwiseAbs().maxCoeff();
     if (!std::isfinite(residual)) return Fault::kNonFiniteResult;
     data.lu.compute(data.dg_dpose);
-    if (!(data.lu.rcond() > 1e-12)) return Fault::kSingular;
+    if (!rcondAbove(data.lu, 1e-12)) return Fault::kSingular;
     if (residual <= tol) return Fault::kNone;
     if (it == max_iterations) break;
     X -= data.lu.solve(data.g);

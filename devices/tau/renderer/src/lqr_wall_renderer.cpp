@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include "uhaptics/core/limits.hpp"
+#include "uhaptics/core/lu_condition.hpp"
 
 namespace uhaptics {
 
@@ -83,7 +84,7 @@ const WallCommand& LqrWallRenderer::tickFrom(Fault f, const Vec6& q, const Surfa
     if (ik != Fault::kNone) return fail(ik);
   }
   j_lu_.compute(data.J);
-  if (!(j_lu_.rcond() > 1e-9)) return fail(Fault::kSingular);
+  if (!rcondAbove(j_lu_, 1e-9)) return fail(Fault::kSingular);
   error_.head<6>() = regulator_.velocity();
   if (options_.follow_tangentially) {
     // No velocity error along the surface either: remove the tangential tool velocity.

@@ -8,6 +8,7 @@ TauServoFrontEnd::TauServoFrontEnd(const TauModel& model) : model_(model), data_
 
 void TauServoFrontEnd::reset() noexcept {
   has_previous_ = false;
+  data_current_ = false;
   qd_.setZero();
   data_.pose = model_.homePose();
 }
@@ -18,6 +19,7 @@ bool TauServoFrontEnd::acceptInputs(const Vec6& q, const SurfaceContact& contact
                          std::abs(contact.normal.norm() - 1.0) > 1e-6))
     return false;
   qd_ = has_previous_ ? ((q - q_) / model_.servoPeriod()).eval() : Vec6::Zero().eval();
+  const bool same_q = has_previous_ && q == q_;
   q_ = q;
   has_previous_ = true;
   return true;
@@ -37,13 +39,21 @@ Fault TauServoFrontEnd::update(const Vec6& q, const SurfaceContact& contact, con
 Fault TauServoFrontEnd::update(const Vec6& q, const SurfaceContact& contact, const Vec6* pose) noexcept {
   if (!acceptInputs(q, contact)) return Fault::kNonFiniteInput;
   if (pose) {
-    if (!pose->allFinite()) return Fault::kNonFiniteInput;
+    if (!pose->allFinite()) {
+      data_current_ = false;
+      return Fault::kNonFiniteInput;
+    }
+    if (same_q && data_current_ && *pose == data_.pose) return Fault::kNone;
     data_.pose = *pose;
+  } else if (same_q && data_current_) {
+    return Fault::kNone;  // Newton would start at the solution for q and stop there
   }
   // With a caller-supplied pose Newton starts at the solution and only evaluates J (0 iterations).
+  data_current_ = false;
   const Fault f = model_.forward(q, data_);
   if (f != Fault::kNone) return f;
   model_.computeGravity(q, data_);
+  data_current_ = true;
   return Fault::kNone;
 }
 

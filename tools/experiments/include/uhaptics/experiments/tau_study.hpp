@@ -36,6 +36,7 @@ struct RunSpec {
   // LQR release height above the wall (m); < 0: the contact band, i.e. paper 001's controller holds
   // the pose for as long as the environment reports the contact.
   double lqr_release_distance = -1.0;
+  int substeps = 0;  // plant integration substeps per servo period; 0: the model's (tau.json)
 };
 
 struct StudyParameters {
@@ -129,6 +130,7 @@ struct GridOptions {
   bool quantize = true;              // 4096-count encoders (false: ideal joint sensors), all variants
   bool applied_torque_known = true;  // RunSpec::applied_torque_known, all variants
   double delay_release_distance = -1.0;  // RunSpec::lqr_release_distance of the delay variants
+  int substeps = 0;                      // RunSpec::substeps, all variants
 };
 
 struct Statistics {

@@ -26,7 +26,9 @@ struct WallCommand {
 };
 
 /// Shared per-tick front end: validated inputs, forward kinematics (or a caller-supplied pose),
-/// velocity by backward difference of the encoder readings, gravity compensation.
+/// velocity by backward difference of the encoder readings, gravity compensation. A reading equal
+/// to the previous one (quantized encoders at rest, most ticks of a held contact) with the same
+/// pose reuses the kinematics and gravity: forward() would return them unchanged.
 class TauServoFrontEnd {
  public:
   explicit TauServoFrontEnd(const TauModel& model);
@@ -51,6 +53,7 @@ class TauServoFrontEnd {
   TauData data_;
   Vec6 q_ = Vec6::Zero(), qd_ = Vec6::Zero();
   bool has_previous_ = false;
+  bool data_current_ = false;  // data_ holds the kinematics and gravity at q_
 };
 
 }  // namespace uhaptics
