@@ -13,31 +13,39 @@ void TauServoFrontEnd::reset() noexcept {
   data_.pose = model_.homePose();
 }
 
-bool TauServoFrontEnd::acceptInputs(const Vec6& q, const SurfaceContact& contact) noexcept {
+bool TauServoFrontEnd::acceptInputs(const Vec6& q, const SurfaceContact& contact, bool& same_q) noexcept {
+  same_q = false;
   if (!q.allFinite()) return false;
   if (contact.active && (!contact.point.allFinite() || !contact.normal.allFinite() ||
                          std::abs(contact.normal.norm() - 1.0) > 1e-6))
     return false;
   qd_ = has_previous_ ? ((q - q_) / model_.servoPeriod()).eval() : Vec6::Zero().eval();
-  const bool same_q = has_previous_ && q == q_;
+  same_q = has_previous_ && q == q_;
   q_ = q;
   has_previous_ = true;
   return true;
 }
 
 Fault TauServoFrontEnd::update(const Vec6& q, const SurfaceContact& contact, const TauData& solved) noexcept {
-  if (!acceptInputs(q, contact)) return Fault::kNonFiniteInput;
+  bool same_q = false;
+  data_current_ = false;
+  if (!acceptInputs(q, contact, same_q)) return Fault::kNonFiniteInput;
   if (!solved.pose.allFinite()) return Fault::kNonFiniteInput;
   // What forward(q) started at this pose would give: the same pose and Jacobian (0 iterations).
   data_.pose = solved.pose;
   data_.J = solved.J;
   if (!data_.J.allFinite()) return Fault::kSingular;
   model_.computeGravity(q, data_);
+  data_current_ = true;
   return Fault::kNone;
 }
 
 Fault TauServoFrontEnd::update(const Vec6& q, const SurfaceContact& contact, const Vec6* pose) noexcept {
-  if (!acceptInputs(q, contact)) return Fault::kNonFiniteInput;
+  bool same_q = false;
+  if (!acceptInputs(q, contact, same_q)) {
+    data_current_ = false;
+    return Fault::kNonFiniteInput;
+  }
   if (pose) {
     if (!pose->allFinite()) {
       data_current_ = false;

@@ -48,7 +48,8 @@ class TauServoFrontEnd {
 
  private:
   // The checks and the velocity estimate both update() share; false: kNonFiniteInput.
-  bool acceptInputs(const Vec6& q, const SurfaceContact& contact) noexcept;
+  /// Checks the inputs and takes q as the new reading; same_q: q equals the previous reading.
+  bool acceptInputs(const Vec6& q, const SurfaceContact& contact, bool& same_q) noexcept;
   const TauModel& model_;
   TauData data_;
   Vec6 q_ = Vec6::Zero(), qd_ = Vec6::Zero();
