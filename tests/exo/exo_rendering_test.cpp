@@ -300,3 +300,43 @@ TEST_CASE("random states, in and far outside the working range: finite commands 
   WARN("random states: " << commands << " commands, " << faults << " faults (zero command)");
   CHECK(commands > 0);
 }
+
+TEST_CASE("the tick from the caller's kinematics equals the tick that evaluates the model, for every renderer") {
+  // A device that already evaluated forward(q, data) (its sensed state) hands x, J and the range
+  // flag to the renderer; the command, the fault and the diagnostics must be those of the plain tick.
+  const Model& m = model();
+  const auto g = gains(5.0, 2000.0);
+  std::uint64_t seed = 777;
+  const auto uniform = [&](double lo, double hi) {
+    seed = seed * 6364136223846793005ULL + 1442695040888963407ULL;
+    return lo + (hi - lo) * static_cast<double>(seed >> 11) / 9007199254740992.0;
+  };
+  const auto compare = [&](auto plain, auto given) {
+    int in_range = 0;
+    for (int k = 0; k < 2000; ++k) {
+      // Each joint over its range and a fifth of it beyond either stop: in and out of the working range.
+      const auto& lim = m.jointLimits();
+      const Model::JointVector span = lim.upper - lim.lower;
+      const Model::JointVector q(uniform(lim.lower(0) - 0.2 * span(0), lim.upper(0) + 0.2 * span(0)),
+                                uniform(lim.lower(1) - 0.2 * span(1), lim.upper(1) + 0.2 * span(1)));
+      ExoFingerData data(m);
+      m.forward(q, data);
+      in_range += data.in_range ? 1 : 0;
+      // Every fourth proxy on the probe: the free-space path.
+      const Model::TaskVector offset(uniform(-0.3, 0.3), uniform(-0.3, 0.3));
+      const Model::TaskVector xp = k % 4 == 0 ? data.x : Model::TaskVector(data.x + offset);
+      Model::ActuatorVector tau_plain, tau_given;
+      const Fault f_plain = plain.tick(q, xp, tau_plain);
+      const Fault f_given = given.tick(q, xp, data.x, data.J, data.in_range, tau_given);
+      REQUIRE(f_given == f_plain);
+      REQUIRE(tau_given == tau_plain);
+      REQUIRE(given.last().free_space == plain.last().free_space);
+    }
+    CHECK(in_range > 200);
+    CHECK(in_range < 1800);
+  };
+  compare(StandardRenderer<Model>(m, g), StandardRenderer<Model>(m, g));
+  compare(NullSpaceRenderer<Model>(m, g), NullSpaceRenderer<Model>(m, g));
+  compare(LinearizedSubspaceRenderer<Model>(m, g), LinearizedSubspaceRenderer<Model>(m, g));
+  compare(NonlinearSubspaceRenderer<Model>(m, g), NonlinearSubspaceRenderer<Model>(m, g));
+}

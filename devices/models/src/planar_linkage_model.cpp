@@ -89,52 +89,61 @@ PlanarLinkageModel<N> PlanarLinkageModel<N>::fromParams(const ParamFile& f, cons
 }
 
 template <int N>
-void PlanarLinkageModel<N>::forward(const JointVector& q, TaskVector& x) const noexcept {
-  JointVector c, s;
-  linkAngles(q, c, s);
+void PlanarLinkageModel<N>::positionAt(const JointVector& c, const JointVector& s, TaskVector& x) const noexcept {
   x = p_.base;
   x(0) += p_.link_length.dot(c);
   x(1) += p_.link_length.dot(s);
 }
 
 template <int N>
-void PlanarLinkageModel<N>::jacobian(const JointVector& q, Jacobian& J) const noexcept {
-  JointVector c, s;
-  linkAngles(q, c, s);
+void PlanarLinkageModel<N>::jacobianAt(const JointVector& c, const JointVector& s, Jacobian& J) const noexcept {
   // Row 0: -sum_i d_i s_i a_ij, row 1: sum_i d_i c_i a_ij.
   J.row(0) = -(p_.link_length.cwiseProduct(s)).transpose() * p_.coupling;
   J.row(1) = (p_.link_length.cwiseProduct(c)).transpose() * p_.coupling;
 }
 
 template <int N>
-void PlanarLinkageModel<N>::jacobianDerivative(const JointVector& q, int k, Jacobian& dJ) const noexcept {
-  JointVector c, s;
-  linkAngles(q, c, s);
+void PlanarLinkageModel<N>::jacobianDerivativeAt(const JointVector& c, const JointVector& s, int k,
+                                                 Jacobian& dJ) const noexcept {
   const JointVector w = p_.link_length.cwiseProduct(p_.coupling.col(k));  // d_i a_ik
   dJ.row(0) = -(w.cwiseProduct(c)).transpose() * p_.coupling;
   dJ.row(1) = -(w.cwiseProduct(s)).transpose() * p_.coupling;
 }
 
 template <int N>
+void PlanarLinkageModel<N>::forward(const JointVector& q, TaskVector& x) const noexcept {
+  JointVector c, s;
+  linkAngles(q, c, s);
+  positionAt(c, s, x);
+}
+
+template <int N>
+void PlanarLinkageModel<N>::jacobian(const JointVector& q, Jacobian& J) const noexcept {
+  JointVector c, s;
+  linkAngles(q, c, s);
+  jacobianAt(c, s, J);
+}
+
+template <int N>
+void PlanarLinkageModel<N>::jacobianDerivative(const JointVector& q, int k, Jacobian& dJ) const noexcept {
+  JointVector c, s;
+  linkAngles(q, c, s);
+  jacobianDerivativeAt(c, s, k, dJ);
+}
+
+template <int N>
 void PlanarLinkageModel<N>::forwardAndJacobian(const JointVector& q, TaskVector& x, Jacobian& J) const noexcept {
   JointVector c, s;
   linkAngles(q, c, s);
-  x = p_.base;
-  x(0) += p_.link_length.dot(c);
-  x(1) += p_.link_length.dot(s);
-  J.row(0) = -(p_.link_length.cwiseProduct(s)).transpose() * p_.coupling;
-  J.row(1) = (p_.link_length.cwiseProduct(c)).transpose() * p_.coupling;
+  positionAt(c, s, x);
+  jacobianAt(c, s, J);
 }
 
 template <int N>
 void PlanarLinkageModel<N>::jacobianDerivatives(const JointVector& q, std::array<Jacobian, N>& dJ) const noexcept {
   JointVector c, s;
   linkAngles(q, c, s);
-  for (int k = 0; k < N; ++k) {
-    const JointVector w = p_.link_length.cwiseProduct(p_.coupling.col(k));  // d_i a_ik
-    dJ[static_cast<std::size_t>(k)].row(0) = -(w.cwiseProduct(c)).transpose() * p_.coupling;
-    dJ[static_cast<std::size_t>(k)].row(1) = -(w.cwiseProduct(s)).transpose() * p_.coupling;
-  }
+  for (int k = 0; k < N; ++k) jacobianDerivativeAt(c, s, k, dJ[static_cast<std::size_t>(k)]);
 }
 
 template <int N>

@@ -126,6 +126,11 @@ class PlanarLinkageModel {
     c = phi.array().cos().matrix();
     s = phi.array().sin().matrix();
   }
+  // The kinematics from the link angles' cosines c and sines s (linkAngles): the public methods
+  // compute those once and share them.
+  void positionAt(const JointVector& c, const JointVector& s, TaskVector& x) const noexcept;
+  void jacobianAt(const JointVector& c, const JointVector& s, Jacobian& J) const noexcept;
+  void jacobianDerivativeAt(const JointVector& c, const JointVector& s, int k, Jacobian& dJ) const noexcept;
 
   Parameters p_;
   Selection selection_ = Selection::Identity();
