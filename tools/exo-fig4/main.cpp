@@ -13,6 +13,7 @@
 #include "uhaptics/backends/params_location.hpp"
 #include "uhaptics/experiments/exo_fig4.hpp"
 #include "uhaptics/experiments/reproduction.hpp"
+#include "uhaptics/tools/cli.hpp"
 #include "uhaptics/tools/csv.hpp"
 #include "uhaptics/tools/plot.hpp"
 
@@ -24,28 +25,31 @@ int main(int argc, char** argv) {
   std::string params = defaultParamsDirectory() + "/exo_finger.json";
   std::string method = "gn";
   exo::Fig4Options o;
-  app.add_option("--out", out, "output folder")->capture_default_str();
-  app.add_option("--params", params, "device parameter file")->capture_default_str();
-  app.add_option("--trajectory", o.trajectory_csv, "recorded finger trajectory (CSV: time_s,mcp_rad,pip_rad); "
-                                                   "default: synthesized flexion-extension");
-  app.add_option("--rate", o.update_rate_hz, "host update rate, Hz (the real USB link: 500)")->capture_default_str();
-  app.add_option("--duration", o.duration_s, "synthesized trajectory length, s")->capture_default_str();
-  app.add_option("--period", o.period_s, "synthesized MCP flexion-extension period, s (PIP: 2/3 of it)")
+  app.footer(tools::CommandLine::kExitCodesHelp);
+  tools::CommandLine cli(app, "uhaptics-exo-fig4");
+  cli.outputFolder("--out", out, "output folder")->capture_default_str();
+  cli.inputFile("--params", params, "device parameter file")->capture_default_str();
+  cli.inputFile("--trajectory", o.trajectory_csv, "recorded finger trajectory (CSV: time_s,mcp_rad,pip_rad); "
+                                                  "default: synthesized flexion-extension");
+  cli.number("--rate", o.update_rate_hz, "host update rate, Hz (the real USB link: 500)", 10.0, 100000.0)
       ->capture_default_str();
-  app.add_option("--zq", o.zq, "Z_q (paper: 1; Z_x = Z_q / avg(|J_a|)^2 I)")->capture_default_str();
-  app.add_option("--min-step", o.min_actuator_step, "smallest actuator motion (m) that defines a "
-                                                    "finite-difference impedance")->capture_default_str();
-  app.add_option("--tolerance", o.solver.tolerance, "nonlinear solve tolerance, rad")->capture_default_str();
-  app.add_option("--max-iterations", o.solver.max_iterations, "nonlinear solve iteration cap")->capture_default_str();
-  app.add_option("--solver", method, "nonlinear solver: gn (Gauss-Newton) or lm (Levenberg-Marquardt)")
-      ->check(CLI::IsMember({"gn", "lm"}))
+  cli.number("--duration", o.duration_s, "synthesized trajectory length, s", 0.1, 600.0)->capture_default_str();
+  cli.number("--period", o.period_s, "synthesized MCP flexion-extension period, s (PIP: 2/3 of it)", 0.1, 600.0)
+      ->capture_default_str();
+  // Z_q scales every force: beyond 1e6 (N/m for a normalized 1) the forces overflow nothing useful.
+  cli.number("--zq", o.zq, "Z_q (paper: 1; Z_x = Z_q / avg(|J_a|)^2 I)", 1e-6, 1e6)->capture_default_str();
+  cli.number("--min-step", o.min_actuator_step, "smallest actuator motion (m) that defines a "
+                                                "finite-difference impedance", 1e-12, 1e-2)->capture_default_str();
+  cli.number("--tolerance", o.solver.tolerance, "nonlinear solve tolerance, rad", 1e-15, 1e-2)->capture_default_str();
+  cli.integer("--max-iterations", o.solver.max_iterations, "nonlinear solve iteration cap", 1, 1000)
+      ->capture_default_str();
+  cli.choice("--solver", method, "nonlinear solver: gn (Gauss-Newton) or lm (Levenberg-Marquardt)", {"gn", "lm"})
       ->capture_default_str();
   double contact_deg = 5.0;
-  app.add_option("--contact-amplitude", contact_deg, "contact variant: finger within +- this many deg of a "
-                                                     "proxy held at MCP 45, PIP 50 deg")
-      ->check(CLI::Range(0.5, 40.0))
+  cli.number("--contact-amplitude", contact_deg, "contact variant: finger within +- this many deg of a "
+                                                 "proxy held at MCP 45, PIP 50 deg", 0.5, 40.0)
       ->capture_default_str();
-  CLI11_PARSE(app, argc, argv);
+  if (const int status = cli.parse(argc, argv); status >= 0) return status;
   o.solver.method = method == "lm" ? LeastSquaresMethod::kLevenbergMarquardt : LeastSquaresMethod::kGaussNewton;
 
   try {
@@ -116,9 +120,9 @@ int main(int argc, char** argv) {
     const std::string png = out + "/exo_fig4.png";
     if (tools::runPlotScript("exo_fig4.py", {out + "/exo_fig4.csv", png})) std::cout << "figure: " << png << "\n";
     std::cout << "results in " << out << "\n";
-    return 0;
+    return table.allPass() ? tools::CommandLine::kAllPass : tools::CommandLine::kRowsFail;
   } catch (const std::exception& e) {
     std::cerr << "uhaptics-exo-fig4: " << e.what() << "\n";
-    return 1;
+    return tools::CommandLine::kRunError;
   }
 }

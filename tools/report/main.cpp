@@ -14,6 +14,7 @@
 #include <sstream>
 
 #include "uhaptics/experiments/report.hpp"
+#include "uhaptics/tools/cli.hpp"
 
 namespace {
 std::string readFile(const std::string& path) {
@@ -31,14 +32,17 @@ int main(int argc, char** argv) {
   std::string bench_json;
   std::vector<std::string> meta;
   std::vector<std::string> docs;
-  app.add_option("--out", root, "Output folder holding one sub-folder per experiment")->capture_default_str();
-  app.add_option("--meta", meta, "Run metadata as key=value (repeatable), shown at the top of the report");
-  app.add_option("--bench-json", bench_json,
-                 "Google Benchmark's JSON output (uhaptics-bench --benchmark_out=F --benchmark_out_format=json): "
-                 "the bench-* regions");
-  app.add_option("--update-doc", docs,
+  app.footer("Exit status: 0 every check passes or needs unpublished data; 1 a check fails; 2 a usage or I/O "
+             "error or a malformed reproduction.csv; 101/105 a refused command-line value.");
+  uhaptics::tools::CommandLine cli(app, "uhaptics-report");
+  cli.inputFolder("--out", root, "Output folder holding one sub-folder per experiment")->capture_default_str();
+  cli.texts("--meta", meta, "Run metadata as key=value (repeatable), shown at the top of the report");
+  cli.inputFile("--bench-json", bench_json,
+                "Google Benchmark's JSON output (uhaptics-bench --benchmark_out=F --benchmark_out_format=json): "
+                "the bench-* regions");
+  cli.inputFiles("--update-doc", docs,
                  "Markdown file whose generated regions to rewrite (repeatable); refused without markers");
-  CLI11_PARSE(app, argc, argv);
+  if (const int status = cli.parse(argc, argv); status >= 0) return status;
   try {
     std::vector<std::pair<std::string, std::string>> metadata;
     for (const auto& kv : meta) {
@@ -58,12 +62,16 @@ int main(int argc, char** argv) {
     std::size_t failed = 0;
     if (!experiments.empty()) {
       const std::string path = root + "/REPORT.md";
-      std::ofstream(path) << uhaptics::experiments::renderMarkdown(experiments, metadata);
+      std::ofstream report(path, std::ios::trunc);
+      if (!(report << uhaptics::experiments::renderMarkdown(experiments, metadata)))
+        throw std::runtime_error(path + ": cannot write");
       uhaptics::experiments::ReproductionTable all;
       for (const auto& e : experiments)
         for (const auto& r : e.table.rows()) all.add(r);
       all.writeCsv(root + "/reproduction.csv");
       std::cout << "\n" << all.format() << "\n";
+      std::cout << all.recheckableRows() << " of " << all.rows().size()
+                << " rows decided again from their numbers (the others join several numbers in one verdict)\n";
       std::size_t passed = 0;
       for (const auto& r : all.rows()) {
         passed += r.pass ? 1 : 0;

@@ -11,7 +11,9 @@
 #include <vector>
 
 #include "uhaptics/backends/params_location.hpp"
+#include "uhaptics/core/fault.hpp"
 #include "uhaptics/renderers/tau_wall_design.hpp"
+#include "uhaptics/tools/cli.hpp"
 #include "uhaptics/tools/plot.hpp"
 
 using namespace uhaptics;
@@ -36,13 +38,32 @@ int main(int argc, char** argv) {
   std::vector<double> pose(6, 0.0);
   const LqrWallWeights defaults;  // tuned for tau.json (README); paper 001: 1 1e3 1e7 1
   std::vector<double> weights = {defaults.velocity, defaults.position, defaults.integral, defaults.torque};
-  app.add_option("--params", params, "device parameter file");
-  app.add_option("--pose", pose, "operating pose x y z (m) alpha beta gamma (rad)")->expected(6);
-  app.add_option("--weights", weights, "Q weights on velocity, position, integral; R weight")->expected(4);
-  app.add_option("--out", out, "output JSON file");
-  CLI11_PARSE(app, argc, argv);
+  app.footer("Exit status: 0 gains written; 2 the design could not be made (bad parameter file, a pose outside "
+             "its workspace, I/O error); 101/105 a refused command-line value.");
+  tools::CommandLine cli(app, "uhaptics-tau-design");
+  cli.inputFile("--params", params, "device parameter file");
+  bool pose_given = false;
+  cli.numbers("--pose", pose, 6,
+              "operating pose x y z (m) alpha beta gamma (rad), inside the parameter file's workspace (default: its "
+              "home pose)", -1.0, 1.0);
+  cli.numbers("--weights", weights, 4, "Q weights on velocity, position, integral; R weight", 1e-9, 1e12);
+  cli.outputFile("--out", out, "output JSON file");
+  if (const int status = cli.parse(argc, argv); status >= 0) return status;
+  pose_given = app.count("--pose") > 0;
   try {
     const TauModel model = TauModel::load(params);
+    if (!pose_given) Eigen::Map<Vec6>(pose.data()) = model.homePose();
+    // The workspace of the parameter file: a cube of half side h about the home position and
+    // +-half angle about each axis.
+    const Vec6 offset = Eigen::Map<const Vec6>(pose.data()) - model.homePose();
+    const double h = model.workspaceHalfSide(), a = model.workspaceHalfAngle();
+    if (offset.head<3>().cwiseAbs().maxCoeff() > h || offset.tail<3>().cwiseAbs().maxCoeff() > a) {
+      char why[512];
+      std::snprintf(why, sizeof why, "--pose: %g %g %g %g %g %g is outside the workspace of %s (position within %g m "
+                    "and angles within %g rad of the home pose)", pose[0], pose[1], pose[2], pose[3], pose[4], pose[5],
+                    params.c_str(), h, a);
+      throw Error(why);
+    }
     LqrWallWeights w{weights[0], weights[1], weights[2], weights[3]};
     const Vec6 op = Eigen::Map<const Vec6>(pose.data());
     const auto t0 = std::chrono::steady_clock::now();
@@ -71,6 +92,6 @@ int main(int argc, char** argv) {
     return 0;
   } catch (const std::exception& e) {
     std::fprintf(stderr, "uhaptics-tau-design: %s\n", e.what());
-    return 1;
+    return tools::CommandLine::kRunError;
   }
 }

@@ -6,6 +6,7 @@
 #include <ctime>
 #include <algorithm>
 #include <cstdio>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -13,12 +14,19 @@
 #include "uhaptics/experiments/parallel.hpp"
 #include "uhaptics/experiments/reproduction.hpp"
 #include "uhaptics/experiments/tau_study.hpp"
+#include "uhaptics/tools/cli.hpp"
 #include "uhaptics/tools/csv.hpp"
 #include "uhaptics/tools/plot.hpp"
 #include "uhaptics/tools/progress.hpp"
 
 using namespace uhaptics;
 using namespace uhaptics::study;
+
+namespace {
+// LQR weights: positive (a zero weight leaves the Riccati equation without a unique solution) and
+// within the range the DARE solver is tested over (paper 001's integral weight is 1e7).
+constexpr double kMinWeight = 1e-9, kMaxWeight = 1e12;
+}  // namespace
 
 int main(int argc, char** argv) {
   CLI::App app{"Paper 001 Monte-Carlo study: LQR position-control wall vs spring wall on the simulated TAU"};
@@ -28,16 +36,19 @@ int main(int argc, char** argv) {
   std::uint64_t seed = 2021;
   std::string out = "out/tau-study";
   std::string params = defaultParamsDirectory() + "/tau.json";
+  app.footer(tools::CommandLine::kExitCodesHelp);
+  tools::CommandLine cli(app, "uhaptics-tau-study");
   app.add_flag("--full", full, "the paper's grid: 11 x 11 query points, 20 runs each");
-  app.add_option("--grid", grid, "query points per side (x, y in [-25, 25] mm)")->check(CLI::Range(2, 51));
-  app.add_option("--runs", runs, "Monte-Carlo runs per query point")->check(CLI::Range(1, 1000));
-  app.add_option("--threads", threads, "worker threads (0 = all cores)");
-  app.add_option("--seed", seed, "base seed (results are identical for any thread count)");
-  app.add_option("--out", out, "output folder");
-  app.add_option("--params", params, "device parameter file");
+  cli.integer("--grid", grid, "query points per side (x, y in [-25, 25] mm)", 2, 51);
+  cli.integer("--runs", runs, "Monte-Carlo runs per query point", 1, 1000);
+  cli.integer("--threads", threads, "worker threads (0 = all cores)", 0, experiments::kMaxThreads);
+  cli.integer("--seed", seed, "base seed (results are identical for any thread count)", 0,
+              std::numeric_limits<long long>::max());
+  cli.outputFolder("--out", out, "output folder");
+  cli.inputFile("--params", params, "device parameter file");
   std::vector<double> weight_list;
-  app.add_option("--weights", weight_list, "LQR weights: velocity position integral torque (default: tuned for tau.json)")
-      ->expected(4);
+  cli.numbers("--weights", weight_list, 4, "LQR weights: velocity position integral torque (default: tuned for tau.json)",
+              kMinWeight, kMaxWeight);
   bool paper_weights = false;
   app.add_flag("--paper-weights", paper_weights, "paper 001's weights Q = diag(I, 1e3 I, 1e7 I), R = I");
   // The delay variants' LQR is designed for the delay the plant has, d ~ U{0..3} i.i.d. each period
@@ -46,52 +57,50 @@ int main(int argc, char** argv) {
   // 100 lose the tool or sink 2.3-4.5 mm in 1-2 runs, 200-300 in none, 500-1000 soften the hold
   // (README, TAU section).
   int delay_design = 3;
-  app.add_option("--delay-design", delay_design,
-                 "largest command delay D (samples) the LQR of the delay variants is designed for (0: the undelayed "
-                 "design)")
-      ->check(CLI::Range(0, kMaxCommandDelay));
+  cli.integer("--delay-design", delay_design,
+              "largest command delay D (samples) the LQR of the delay variants is designed for (0: the undelayed "
+              "design)", 0, kMaxCommandDelay);
   std::vector<double> delay_weight_list;
-  app.add_option("--delay-weights", delay_weight_list, "LQR weights of the delay variants (default: as --weights)")
-      ->expected(4);
+  cli.numbers("--delay-weights", delay_weight_list, 4, "LQR weights of the delay variants (default: as --weights)",
+              kMinWeight, kMaxWeight);
   bool delay_fixed = false;
   app.add_flag("--delay-fixed", delay_fixed,
                "design the delay variants for a fixed delay of D = --delay-design samples instead of the random "
                "d ~ U{0..D}");
   double delay_rate_weight = 200.0;
-  CLI::Option* rate_weight_option = app.add_option("--delay-rate-weight", delay_rate_weight,
-                 "random-delay design only: weight on (u_k - u_{k-1})^2 per joint, (N m)^-2")
-      ->check(CLI::NonNegativeNumber);
+  CLI::Option* rate_weight_option = cli.number("--delay-rate-weight", delay_rate_weight,
+                 "random-delay design only: weight on (u_k - u_{k-1})^2 per joint, (N m)^-2", 0.0, kMaxWeight);
   bool applied_unknown = false;
   app.add_flag("--applied-unknown", applied_unknown,
                "the observer infers the torque the device applied from the delay model instead of the device's "
                "report (the protocol's STATE frame echoes the sequence of the command applied)");
   std::vector<double> delay_observer;
-  app.add_option("--delay-observer", delay_observer,
-                 "observer noise of the delay variants: velocity, disturbance, position process noise, encoder std "
-                 "(0: resolution / sqrt(12))")
-      ->expected(4);
+  cli.numbers("--delay-observer", delay_observer, 4,
+              "observer noise of the delay variants: velocity, disturbance, position process noise, encoder std "
+              "(0: resolution / sqrt(12))", 0.0, 1e6);
   double delay_release = -1.0;
-  app.add_option("--delay-release-distance", delay_release,
-                 "LQR release height above the wall (m) in the delay variants (default: hold while the environment reports the contact)");
+  // Within the 50 mm workspace cube (tau.json): a release higher than the workspace never happens.
+  cli.number("--delay-release-distance", delay_release,
+             "LQR release height above the wall (m) in the delay variants (default: hold while the environment "
+             "reports the contact)", 0.0, 0.05);
   int substeps = 0;
-  app.add_option("--substeps", substeps,
-                 "plant integration substeps per servo period in the grid runs (default: the parameter file's)")
-      ->check(CLI::Range(1, 1000));
+  cli.integer("--substeps", substeps,
+              "plant integration substeps per servo period in the grid runs (default: the parameter file's)", 1, 1000);
   bool ideal_encoders = false;
   app.add_flag("--ideal-encoders", ideal_encoders, "ideal joint sensors instead of 4096-count encoders (all variants)");
-  CLI11_PARSE(app, argc, argv);
+  if (const int status = cli.parse(argc, argv); status >= 0) return status;
   if (rate_weight_option->count() > 0 && (delay_fixed || delay_design == 0)) {
     std::fprintf(stderr, "uhaptics-tau-study: --delay-rate-weight is for the random-delay design (not with "
                          "--delay-fixed or --delay-design 0)\n");
-    return 2;
+    return tools::CommandLine::kRunError;
   }
   if (full) {
     grid = 11;
     runs = 20;
   }
   try {
-    tools::ensureDirectory(out);
     const TauModel model = TauModel::load(params);
+    tools::ensureDirectory(out);  // after the parameter file is read: a refused file leaves no folder
     const auto t_design = std::chrono::steady_clock::now();
     LqrWallWeights weights;  // tuned for our plant (README); --paper-weights for paper 001's own
     if (paper_weights) weights = LqrWallWeights::paper();
@@ -185,9 +194,9 @@ int main(int argc, char** argv) {
         trace_csv.row({a[i].t, 1e3 * a[i].z, 1e3 * b[i].z, a[i].force});
     }  // trace files closed here
     tools::runPlotScript("tau_study.py", {out});
-    return 0;
+    return table.allPass() ? tools::CommandLine::kAllPass : tools::CommandLine::kRowsFail;
   } catch (const std::exception& e) {
     std::fprintf(stderr, "uhaptics-tau-study: %s\n", e.what());
-    return 1;
+    return tools::CommandLine::kRunError;
   }
 }
