@@ -95,10 +95,13 @@ RunMetrics simulateRun(const TauModel& model, const LqrWallGains& gains, const R
     }
     contact.active = fk == Fault::kNone && device.pose(2) <= params.contact_band;
     contact.point = Vec3(device.pose(0), device.pose(1), 0.0);
-    const Vec6* pose = fk == Fault::kNone ? &device.pose : nullptr;
     const Vec6* applied = spec.applied_torque_known ? &sim.appliedTorque() : nullptr;
-    const WallCommand& cmd = spec.controller == Controller::kLqr ? lqr.tick(q_meas, contact, pose, applied)
-                                                                 : spring.tick(q_meas, contact, pose);
+    // The walls take the solved kinematics as they are (pose and Jacobian): one solve per period.
+    const bool lqr_wall = spec.controller == Controller::kLqr;
+    const WallCommand& cmd = fk != Fault::kNone ? (lqr_wall ? lqr.tick(q_meas, contact, nullptr, applied)
+                                                            : spring.tick(q_meas, contact, nullptr))
+                             : lqr_wall         ? lqr.tick(q_meas, contact, device, applied)
+                                                : spring.tick(q_meas, contact, device);
     if (cmd.fault != Fault::kNone && m.fault == Fault::kNone) {
       m.fault = cmd.fault;
       m.fault_time = t;

@@ -18,7 +18,14 @@ void SpringWallRenderer::reset() noexcept {
 }
 
 const WallCommand& SpringWallRenderer::tick(const Vec6& q, const SurfaceContact& contact, const Vec6* pose) noexcept {
-  const Fault f = front_.update(q, contact, pose);
+  return tickFrom(front_.update(q, contact, pose), contact);
+}
+
+const WallCommand& SpringWallRenderer::tick(const Vec6& q, const SurfaceContact& contact, const TauData& solved) noexcept {
+  return tickFrom(front_.update(q, contact, solved), contact);
+}
+
+const WallCommand& SpringWallRenderer::tickFrom(Fault f, const SurfaceContact& contact) noexcept {
   if (f != Fault::kNone) {
     cmd_ = WallCommand{};
     cmd_.fault = f;

@@ -18,10 +18,16 @@ class SpringWallRenderer {
   SpringWallRenderer(const TauModel& model, const Options& options);
   explicit SpringWallRenderer(const TauModel& model) : SpringWallRenderer(model, Options{}) {}
   void reset() noexcept;
+  /// pose: the caller's forward-kinematics result for q (nullptr: computed here).
   const WallCommand& tick(const Vec6& q, const SurfaceContact& contact, const Vec6* pose = nullptr) noexcept;
+  /// The same tick from forward kinematics the caller already solved for q (TauModel::forward(q,
+  /// solved) returned kNone; pose and Jacobian are used as they are).
+  const WallCommand& tick(const Vec6& q, const SurfaceContact& contact, const TauData& solved) noexcept;
   const WallCommand& command() const noexcept { return cmd_; }
 
  private:
+  // tick() after the front end's update returned f.
+  const WallCommand& tickFrom(Fault f, const SurfaceContact& contact) noexcept;
   TauServoFrontEnd front_;
   Options options_;
   WallCommand cmd_;
