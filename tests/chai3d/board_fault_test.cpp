@@ -220,7 +220,11 @@ TEST_CASE("soak, short: each device a few seconds under random board faults", "[
     INFO(name << ": " << r.error << "\n" << uhaptics::soak::faultsCsv({r}));
     REQUIRE(r.error.empty());
     CHECK(r.faults.size() >= 3);
-    CHECK(r.recovered() == r.faults.size());
+    CHECK(r.recovered() == r.faults.size());  // the link comes back after every fault
+    // Known: a TAU left unpowered long enough sags out of its forward kinematics' reach and its
+    // renderer faults until the user lifts it (docs/hardware.md): reported, not failed.
+    if (r.renderingNotResumed() > 0)
+      WARN(name << ": rendering not resumed after " << r.renderingNotResumed() << " of " << r.faults.size() << " faults");
     CHECK(r.zeroLate() == 0);
     CHECK(r.max_command_ratio <= 1.0);
     CHECK(r.frames_lost + r.frames_rejected + r.host_watchdog_trips + r.disconnects + r.board_resets > 0);  // faults happened

@@ -82,7 +82,8 @@ int main(int argc, char** argv) {
       std::cout << name << ": " << r.error << "\n";
     } else {
       std::cout << name << ": " << r.seconds << " s, " << r.servo_ticks << " servo ticks, " << r.faults.size()
-                << " faults injected, " << r.recovered() << " recovered, " << r.zeroLate()
+                << " faults injected, " << r.recovered() << " recovered (link), " << r.renderingNotResumed()
+                << " with the device's rendering not resumed, " << r.zeroLate()
                 << " not zeroed within " << r.watchdog_periods << " periods; lost frames " << r.frames_lost
                 << ", rejected " << r.frames_rejected << ", host watchdog trips " << r.host_watchdog_trips
                 << " (loop stalls " << r.loop_stalls << "), board watchdog trips " << r.board_watchdog_trips

@@ -67,6 +67,10 @@ std::uint64_t Result::recovered() const {
   return static_cast<std::uint64_t>(std::count_if(faults.begin(), faults.end(), [](const FaultRecord& f) { return f.recovered; }));
 }
 
+std::uint64_t Result::renderingNotResumed() const {
+  return static_cast<std::uint64_t>(std::count_if(faults.begin(), faults.end(), [](const FaultRecord& f) { return !f.rendering_resumed; }));
+}
+
 std::uint64_t Result::zeroLate() const {
   const int limit = watchdog_periods;
   return static_cast<std::uint64_t>(std::count_if(faults.begin(), faults.end(), [limit](const FaultRecord& f) {
@@ -75,7 +79,7 @@ std::uint64_t Result::zeroLate() const {
 }
 
 bool Result::passed(long long max_heap_growth_bytes) const {
-  return error.empty() && !faults.empty() && recovered() == faults.size() && zeroLate() == 0 &&
+  return error.empty() && !faults.empty() && recovered() == faults.size() && renderingNotResumed() == 0 && zeroLate() == 0 &&
          max_command_ratio <= 1.0 + 1e-9 && heap_growth_bytes <= max_heap_growth_bytes;
 }
 
@@ -108,7 +112,7 @@ Result run(const Options& options, const std::function<void(const Result&, doubl
   std::mt19937_64 rng(options.seed);
   const auto uniform = [&rng](double lo, double hi) { return std::uniform_real_distribution<double>(lo, hi)(rng); };
   const auto integer = [&rng](int lo, int hi) { return std::uniform_int_distribution<int>(lo, hi)(rng); };
-  const double amplitude = 0.25 * device->getSpecifications().m_maxLinearForce;  // a steady contact
+  const double amplitude = options.force_fraction * device->getSpecifications().m_maxLinearForce;  // a steady contact
   const int periods = result.watchdog_periods;
 
   const Clock::time_point start = Clock::now();
@@ -118,6 +122,17 @@ Result run(const Options& options, const std::function<void(const Result&, doubl
   bool have_baseline = false, active = false;
   long long heap0 = 0, rss0 = 0;
   Episode ep;
+  const auto fillCounters = [&result, loop] {
+    const ServoCounters k = loop->counters();
+    result.servo_ticks = k.ticks;
+    result.frames_lost = k.frames_lost;
+    result.frames_rejected = k.frames_rejected;
+    result.duplicates = k.duplicates;
+    result.host_watchdog_trips = k.host_watchdog_trips;
+    result.loop_stalls = k.loop_stalls;
+    result.disconnects = k.disconnects;
+    result.board_resets = k.board_resets;
+  };
 
   for (Clock::time_point now = start; since(now) < options.seconds; now = Clock::now()) {
     const double t = since(now);
@@ -219,14 +234,20 @@ Result run(const Options& options, const std::function<void(const Result&, doubl
           ep.end_wall = now;
         }
       } else {
-        const bool running = device->getLinkStatus() == LinkStatus::kRunning && device->getLastFault() == Fault::kNone;
+        const bool link = device->getLinkStatus() == LinkStatus::kRunning;
+        const bool rendering = device->getLastFault() == Fault::kNone;
         const bool forces = control->snapshot(board) && board.outputs_enabled;
         const double waited = std::chrono::duration<double>(now - ep.end_wall).count();
-        if (running && forces && (!f.zeroed || ep.resumed)) {
+        f.last_link = toString(device->getLinkStatus());  // what an unrecovered fault ended in
+        f.last_fault = toString(device->getLastFault());
+        f.board_applying = forces;
+        const bool link_back = link && forces && (!f.zeroed || ep.resumed);
+        if (link_back && !f.recovered) {
           f.recovered = true;
           f.recovery_s = waited;
         }
-        if (f.recovered || waited > options.recovery_timeout) {
+        f.rendering_resumed = link_back && rendering;
+        if (f.rendering_resumed || waited > options.recovery_timeout) {
           result.faults.push_back(f);
           active = false;
           next_fault = now + std::chrono::duration_cast<Clock::duration>(
@@ -237,6 +258,7 @@ Result run(const Options& options, const std::function<void(const Result&, doubl
 
     if (progress && now >= next_progress) {
       result.seconds = t;
+      fillCounters();
       progress(result, t);
       next_progress = now + std::chrono::seconds(1);
     }
@@ -250,15 +272,7 @@ Result run(const Options& options, const std::function<void(const Result&, doubl
     result.heap_growth_bytes = heapInUseBytes() - heap0;
     result.rss_growth_kib = residentKib() - rss0;
   }
-  const ServoCounters k = loop->counters();
-  result.servo_ticks = k.ticks;
-  result.frames_lost = k.frames_lost;
-  result.frames_rejected = k.frames_rejected;
-  result.duplicates = k.duplicates;
-  result.host_watchdog_trips = k.host_watchdog_trips;
-  result.loop_stalls = k.loop_stalls;
-  result.disconnects = k.disconnects;
-  result.board_resets = k.board_resets;
+  fillCounters();
   BoardEmulator::Snapshot board;
   if (control->snapshot(board)) result.board_watchdog_trips = board.watchdog_trips;
   const SessionStatsSnapshot stats = device->getSessionStats();
@@ -270,12 +284,12 @@ Result run(const Options& options, const std::function<void(const Result&, doubl
 
 std::string summaryCsv(const std::vector<Result>& results, long long max_heap_growth_bytes) {
   std::ostringstream out;
-  out << "device,seconds,servo_ticks,faults,recovered,zero_late,frames_lost,frames_rejected,duplicates,"
+  out << "device,seconds,servo_ticks,faults,recovered,rendering_not_resumed,zero_late,frames_lost,frames_rejected,duplicates,"
          "host_watchdog_trips,loop_stalls,disconnects,board_resets,board_watchdog_trips,device_link_losses,"
          "device_link_recoveries,max_command_ratio,heap_growth_bytes,rss_growth_kib,pass,error\n";
   for (const Result& r : results) {
     out << r.device << ',' << r.seconds << ',' << r.servo_ticks << ',' << r.faults.size() << ',' << r.recovered() << ','
-        << r.zeroLate() << ',' << r.frames_lost << ',' << r.frames_rejected << ',' << r.duplicates << ','
+        << r.renderingNotResumed() << ',' << r.zeroLate() << ',' << r.frames_lost << ',' << r.frames_rejected << ',' << r.duplicates << ','
         << r.host_watchdog_trips << ',' << r.loop_stalls << ',' << r.disconnects << ',' << r.board_resets << ','
         << r.board_watchdog_trips << ',' << r.device_link_losses << ',' << r.device_link_recoveries << ','
         << r.max_command_ratio << ',' << r.heap_growth_bytes << ',' << r.rss_growth_kib << ','
@@ -288,13 +302,15 @@ std::string summaryCsv(const std::vector<Result>& results, long long max_heap_gr
 
 std::string faultsCsv(const std::vector<Result>& results) {
   std::ostringstream out;
-  out << "device,index,kind,frames_or_ms,delay_periods,injected_at_s,zero_expected,zeroed,periods_to_zero,recovered,recovery_ms\n";
+  out << "device,index,kind,frames_or_ms,delay_periods,injected_at_s,zero_expected,zeroed,periods_to_zero,recovered,recovery_ms,"
+         "rendering_resumed,last_link,last_fault,board_applying\n";
   for (const Result& r : results) {
     for (std::size_t i = 0; i < r.faults.size(); ++i) {
       const FaultRecord& f = r.faults[i];
       out << r.device << ',' << i << ',' << toString(f.kind) << ',' << f.frames << ',' << f.delay_periods << ','
           << f.injected_at << ',' << f.zero_expected << ',' << f.zeroed << ',' << f.periods_to_zero << ','
-          << f.recovered << ',' << 1e3 * f.recovery_s << '\n';
+          << f.recovered << ',' << 1e3 * f.recovery_s << ',' << f.rendering_resumed << ",\"" << f.last_link << "\",\"" << f.last_fault << "\","
+          << f.board_applying << '\n';
     }
   }
   return out.str();

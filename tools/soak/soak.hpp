@@ -24,6 +24,7 @@ struct Options {
   double mean_fault_interval = 2.0; // [s] quiet time between a recovery and the next fault (mean)
   double recovery_timeout = 5.0;    // [s] a fault not recovered by then counts as unrecovered
   double warmup = 2.0;              // [s] before the memory baseline is taken
+  double force_fraction = 0.1;      // the application's force, of the device's rated force
 };
 
 enum class FaultKind { kSilent, kCorrupt, kDuplicate, kDelay, kUnplug, kBoardReset };
@@ -37,8 +38,13 @@ struct FaultRecord {
   bool zero_expected = false; // the fault must bring the command to zero (watchdog, unplug, reset)
   bool zeroed = false;        // the loop reported zero (host watchdog, disconnect, board reset)
   int periods_to_zero = -1;   // servo periods from the first period without a valid STATE to zero
-  bool recovered = false;
+  bool recovered = false;          // the link is back: running, the board applying commands
+  bool rendering_resumed = false;  // and the device's renderer works again (no fault)
   double recovery_s = 0.0;    // [s] from the end of the fault to a running link and forces again
+  // The device's state when the record closed (what an unrecovered fault was stuck in).
+  const char* last_link = "";
+  const char* last_fault = "";
+  bool board_applying = false;
 };
 
 struct Result {
@@ -54,6 +60,7 @@ struct Result {
   long long heap_growth_bytes = 0;  // heap in use at the end minus after warm-up (glibc mallinfo2)
   long long rss_growth_kib = 0;     // resident set likewise
   std::uint64_t recovered() const;
+  std::uint64_t renderingNotResumed() const;  // recovered links whose device still faulted at the timeout
   std::uint64_t zeroLate() const;   // faults that had to zero and did not within the watchdog's periods
   /// The criteria: opened, every fault recovered and zeroed in time, commands within limits, no
   /// heap growth beyond max_heap_growth_bytes.
