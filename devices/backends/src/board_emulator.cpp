@@ -270,4 +270,49 @@ BoardEmulator::Snapshot BoardEmulator::snapshot() const noexcept {
   return s;
 }
 
+bool BoardEmulatorControl::attached() const noexcept {
+  const std::lock_guard<std::mutex> lock(mutex_);
+  return emulator_ != nullptr;
+}
+
+void BoardEmulatorControl::attach(BoardEmulator* emulator) noexcept {
+  const std::lock_guard<std::mutex> lock(mutex_);
+  emulator_ = emulator;
+}
+
+bool BoardEmulatorControl::inject(BoardEmulator::Fault fault, int frames, int delay_periods) noexcept {
+  const std::lock_guard<std::mutex> lock(mutex_);
+  if (emulator_ == nullptr) return false;
+  emulator_->inject(fault, frames, delay_periods);
+  return true;
+}
+
+bool BoardEmulatorControl::unplug() noexcept {
+  const std::lock_guard<std::mutex> lock(mutex_);
+  if (emulator_ == nullptr) return false;
+  emulator_->unplug();
+  return true;
+}
+
+bool BoardEmulatorControl::replug() noexcept {
+  const std::lock_guard<std::mutex> lock(mutex_);
+  if (emulator_ == nullptr) return false;
+  emulator_->replug();
+  return true;
+}
+
+bool BoardEmulatorControl::resetBoard() noexcept {
+  const std::lock_guard<std::mutex> lock(mutex_);
+  if (emulator_ == nullptr) return false;
+  emulator_->resetBoard();
+  return true;
+}
+
+bool BoardEmulatorControl::snapshot(BoardEmulator::Snapshot& out) const noexcept {
+  const std::lock_guard<std::mutex> lock(mutex_);
+  if (emulator_ == nullptr) return false;
+  out = emulator_->snapshot();
+  return true;
+}
+
 }  // namespace uhaptics

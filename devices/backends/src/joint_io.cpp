@@ -76,8 +76,10 @@ class SimJointIo final : public JointIo {
 // "emulated" and "usb": a transport to a board and the real-time servo loop on it.
 class ServoJointIo final : public JointIo {
  public:
-  ServoJointIo(const DeviceDefinition& device, BoardSpec spec, std::string backend, ServoConfig servo, ServoRenderer* renderer)
-      : JointIo(std::move(spec), std::move(backend)), device_(device), servo_(servo), renderer_(renderer) {
+  ServoJointIo(const DeviceDefinition& device, BoardSpec spec, std::string backend, ServoConfig servo, ServoRenderer* renderer,
+               std::shared_ptr<BoardEmulatorControl> control)
+      : JointIo(std::move(spec), std::move(backend)), device_(device), servo_(servo), renderer_(renderer),
+        control_(std::move(control)) {
     if (servo_.rate_hz == 0.0) servo_.rate_hz = this->spec().servo_rate_hz;
     if (servo_.board_watchdog_us == 0) servo_.board_watchdog_us = this->spec().board_watchdog_us;
     servo_.validate();
@@ -96,7 +98,9 @@ class ServoJointIo final : public JointIo {
         board.device = d.type;
         board.sample_rate_hz = spec().sample_rate_hz;
         board.effort_limit = d.effort_limit;
-        transport_ = std::make_unique<BoardEmulator>(board, *plant_);
+        auto emulator = std::make_unique<BoardEmulator>(board, *plant_);
+        if (control_) control_->attach(emulator.get());
+        transport_ = std::move(emulator);
       }
       loop_ = std::make_unique<ServoLoop>(d, *transport_, servo_, renderer_);
       loop_->connect();
@@ -109,16 +113,19 @@ class ServoJointIo final : public JointIo {
   void close() noexcept override {
     if (loop_) loop_->stop();  // commands zero before the thread ends
     loop_.reset();
+    if (control_) control_->attach(nullptr);
     transport_.reset();
     plant_.reset();
-    have_state_ = false;
+    have_state_ = stopped_ = false;
   }
   bool isOpen() const noexcept override { return loop_ != nullptr; }
 
   bool read(double* positions) noexcept override {
     if (!loop_) return false;
     if (loop_->latest(snapshot_)) have_state_ = true;
-    if (!have_state_ || snapshot_.link != LinkState::kRunning || snapshot_.host_watchdog_tripped) return false;
+    // A stopped loop's last snapshot may still say kRunning until its thread has ended.
+    stopped_ = !loop_->running();
+    if (stopped_ || !have_state_ || snapshot_.link != LinkState::kRunning || snapshot_.host_watchdog_tripped) return false;
     std::copy(snapshot_.position.begin(), snapshot_.position.begin() + snapshot_.joints, positions);
     return true;
   }
@@ -130,6 +137,18 @@ class ServoJointIo final : public JointIo {
     loop_->request(r);  // the servo loop's safety stage checks it before it leaves the host
   }
   Fault advance(double) noexcept override { return Fault::kNone; }
+  LinkStatus linkStatus() const noexcept override {
+    if (!loop_) return LinkStatus::kClosed;
+    if (stopped_ || snapshot_.link == LinkState::kStopped) return LinkStatus::kStopped;
+    if (!have_state_) return LinkStatus::kConnecting;
+    switch (snapshot_.link) {
+      case LinkState::kConnecting: return LinkStatus::kConnecting;
+      case LinkState::kDisconnected: return LinkStatus::kDisconnected;
+      case LinkState::kStopped: return LinkStatus::kStopped;
+      case LinkState::kRunning: break;
+    }
+    return snapshot_.host_watchdog_tripped ? LinkStatus::kHostWatchdog : LinkStatus::kRunning;
+  }
   std::uint32_t sampleTimeUs() const noexcept override { return snapshot_.sample_time_us[0]; }
   ServoLoop* servoLoop() noexcept override { return loop_.get(); }
   std::string describe() const override {
@@ -143,8 +162,9 @@ class ServoJointIo final : public JointIo {
   std::unique_ptr<BoardPlant> plant_;
   std::unique_ptr<Transport> transport_;
   std::unique_ptr<ServoLoop> loop_;
+  std::shared_ptr<BoardEmulatorControl> control_;
   DeviceSnapshot snapshot_;
-  bool have_state_ = false;
+  bool have_state_ = false, stopped_ = false;
 };
 
 }  // namespace
@@ -164,6 +184,18 @@ void JointRateEstimator::update(const double* positions, int n, std::uint32_t sa
   std::copy(rate_.begin(), rate_.begin() + n, rates);
 }
 
+const char* toString(LinkStatus s) noexcept {
+  switch (s) {
+    case LinkStatus::kClosed: return "closed";
+    case LinkStatus::kRunning: return "running";
+    case LinkStatus::kConnecting: return "connecting to the board (zero commanded)";
+    case LinkStatus::kDisconnected: return "board disconnected (nothing sent, board unpowered)";
+    case LinkStatus::kHostWatchdog: return "host watchdog: no valid state from the board (zero commanded)";
+    case LinkStatus::kStopped: return "servo loop stopped (no current reading)";
+  }
+  return "unknown link status";
+}
+
 std::unique_ptr<JointIo> makeSimJointIo(BoardSpec spec, std::function<std::unique_ptr<BoardPlant>()> make_plant) {
   if (!make_plant) throw Error("makeSimJointIo: no plant factory");
   return std::make_unique<SimJointIo>(std::move(spec), std::move(make_plant));
@@ -177,6 +209,9 @@ std::unique_ptr<JointIo> makeJointIo(const std::string& device, const std::strin
   const auto backends = jointIoBackends();
   if (std::find(backends.begin(), backends.end(), backend) == backends.end())
     throw Error("unknown backend '" + backend + "' for device '" + device + "': use sim, emulated or usb");
+  if (options.emulator_control && backend != "emulated")
+    throw Error("device '" + device + "': emulator_control is given but the backend is " + backend +
+                "; board faults can be injected only with the emulated backend");
   if (options.params_dir.empty()) throw Error("makeJointIo: params_dir is required (the device parameter files)");
   BoardSpec spec = options.params_file.empty() ? boardSpec(definition, options.params_dir)
                                                : boardSpecFromFile(definition, options.params_file);
@@ -184,7 +219,8 @@ std::unique_ptr<JointIo> makeJointIo(const std::string& device, const std::strin
     const std::string path = spec.params_path;
     return makeSimJointIo(std::move(spec), [&definition, path] { return definition.make_plant(path); });
   }
-  return std::make_unique<ServoJointIo>(definition, std::move(spec), backend, options.servo, options.renderer);
+  return std::make_unique<ServoJointIo>(definition, std::move(spec), backend, options.servo, options.renderer,
+                                        options.emulator_control);
 }
 
 }  // namespace uhaptics

@@ -311,6 +311,11 @@ void ServoLoop::run() noexcept {
     tick();
   }
   if (link_ == LinkState::kRunning) sendZero();  // leave the device unpowered on close
+  // Readers must not take the last reading for a live one once nothing runs.
+  DeviceSnapshot last;
+  fillSnapshot(last);
+  last.link = LinkState::kStopped;
+  snapshots_.write(last);  // command_sent stays zero: zero was the last command
 }
 
 void ServoLoop::onDisconnected() noexcept {
@@ -357,6 +362,7 @@ void ServoLoop::tick() noexcept {
       break;
     }
     case LinkState::kRunning: runningTick(); break;
+    case LinkState::kStopped: break;  // only in the snapshot run() leaves behind
   }
   publish();
 }

@@ -74,8 +74,14 @@ double cUhapticsDevice::wallTime() const noexcept {
 }
 
 std::unique_ptr<uhaptics::JointIo> cUhapticsDevice::makeJointIo() {
-  uhaptics::JointIoOptions options;
-  options.params_dir = paramsDirectory();
+  uhaptics::JointIoOptions options = m_selection.joint_io;
+  if (options.params_dir.empty()) options.params_dir = paramsDirectory();
+  if (options.renderer != nullptr)
+    throw uhaptics::Error("device '" + m_selection.device + "': the selection's joint_io.renderer must be empty (the "
+                          "CHAI3D device renders in its own ticks)");
+  if (options.emulator_control && m_selection.backend != "emulated")
+    throw uhaptics::Error("device '" + m_selection.device + "': joint_io.emulator_control needs the emulated backend, not " +
+                          m_selection.backend);
   std::unique_ptr<uhaptics::JointIo> io;
   if (m_selection.backend != "sim") {
     io = uhaptics::makeJointIo(m_selection.device, m_selection.backend, options);
@@ -150,6 +156,7 @@ bool cUhapticsDevice::open() {
   m_commandTorque.setZero();
   m_ticks = 0;
   m_lastFault = uhaptics::Fault::kNone;
+  m_linkStatus = m_io->linkStatus();
   m_origin = Clock::now();
   m_stats.start(wallTime());
   m_deviceReady = true;
@@ -209,6 +216,11 @@ void cUhapticsDevice::setStatsFile(const std::string& a_path) {
 
 uhaptics::SessionStatsSnapshot cUhapticsDevice::getSessionStats() const { return m_stats.snapshot(wallTime()); }
 
+uhaptics::LinkStatus cUhapticsDevice::getLinkStatus() {
+  std::lock_guard<std::mutex> lock(m_mutex);
+  return m_deviceReady ? m_linkStatus : uhaptics::LinkStatus::kClosed;
+}
+
 uhaptics::Fault cUhapticsDevice::getLastFault() {
   std::lock_guard<std::mutex> lock(m_mutex);
   return m_lastFault;
@@ -221,7 +233,10 @@ void cUhapticsDevice::tickLocked() noexcept {
   double output = 0.0;
   const uhaptics::Vec3 seen = m_state.position;
   // A board's newest sample now; a simulation's reading from right after its last step.
-  if (!m_sensedAfterAdvance && !readJointsLocked(false)) {
+  const bool reading = m_sensedAfterAdvance || readJointsLocked(false);
+  m_linkStatus = m_io->linkStatus();
+  m_stats.recordReading(reading);
+  if (!reading) {
     commandZeroLocked();
     readingLost();
     fault = uhaptics::Fault::kDeviceError;

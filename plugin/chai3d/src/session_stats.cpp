@@ -18,10 +18,26 @@ void SessionStats::start(double wall_time) noexcept {
   contacts_.store(0);
   contact_ticks_.store(0);
   faults_.store(0);
+  link_down_ = false;
+  ticks_without_reading_.store(0);
+  link_losses_.store(0);
+  link_recoveries_.store(0);
   peak_force_.store(0.0);
   peak_output_.store(0.0);
   for (auto& value : figure_values_) value.store(0.0);
   visited_any_.store(false);
+}
+
+void SessionStats::recordReading(bool have_reading) noexcept {
+  // Single writer: load + store.
+  const auto bump = [](std::atomic<std::uint64_t>& c) { c.store(c.load(std::memory_order_relaxed) + 1, std::memory_order_relaxed); };
+  if (!have_reading) {
+    bump(ticks_without_reading_);
+    if (!link_down_) bump(link_losses_);
+  } else if (link_down_) {
+    bump(link_recoveries_);
+  }
+  link_down_ = !have_reading;
 }
 
 void SessionStats::recordPosition(double x, double y, double z) noexcept {
@@ -106,6 +122,9 @@ SessionStatsSnapshot SessionStats::snapshot(double wall_time) const noexcept {
   s.peak_output = peak_output_.load();
   s.faults = faults_.load();
   s.in_contact = in_contact_now_.load();
+  s.ticks_without_reading = ticks_without_reading_.load();
+  s.link_losses = link_losses_.load();
+  s.link_recoveries = link_recoveries_.load();
   if (visited_any_.load(std::memory_order_acquire)) {
     for (std::size_t i = 0; i < 3; ++i) {
       s.visited_min[i] = visited_min_[i].load();
@@ -152,6 +171,9 @@ std::string formatStatsJson(const SessionStatsSnapshot& stats, const std::string
       << "  \"peak_output\": " << stats.peak_output << ",\n"
       << "  \"faults\": " << stats.faults << ",\n"
       << "  \"in_contact\": " << (stats.in_contact ? "true" : "false") << ",\n"
+      << "  \"ticks_without_reading\": " << stats.ticks_without_reading << ",\n"
+      << "  \"link_losses\": " << stats.link_losses << ",\n"
+      << "  \"link_recoveries\": " << stats.link_recoveries << ",\n"
       << "  \"visited_min_radii\": [" << stats.visited_min[0] << ", " << stats.visited_min[1] << ", "
       << stats.visited_min[2] << "],\n"
       << "  \"visited_max_radii\": [" << stats.visited_max[0] << ", " << stats.visited_max[1] << ", "

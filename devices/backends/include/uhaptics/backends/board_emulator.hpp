@@ -115,4 +115,28 @@ class BoardEmulator final : public Transport {
   std::uint64_t rx_frames_ = 0;  // host frames received
 };
 
+/// A handle on the board emulator behind an "emulated" joint I/O (JointIoOptions::emulator_control),
+/// for whoever drives the device from outside: a test or the soak run injects faults mid-session
+/// while the application keeps using the device. The joint I/O attaches its emulator in open() and
+/// detaches it in close(); while detached every call does nothing and reports false. Thread-safe.
+class BoardEmulatorControl {
+ public:
+  /// Whether an emulator is attached (the joint I/O is open).
+  bool attached() const noexcept;
+  /// BoardEmulator::inject(): the next `frames` frames the board sends (one per servo period) are
+  /// dropped (the board is silent that long), corrupted, duplicated or delayed.
+  bool inject(BoardEmulator::Fault fault, int frames, int delay_periods = 0) noexcept;
+  bool unplug() noexcept;
+  bool replug() noexcept;
+  bool resetBoard() noexcept;
+  bool snapshot(BoardEmulator::Snapshot& out) const noexcept;
+
+  /// The joint I/O's side: attach(&emulator) after making it, attach(nullptr) before destroying it.
+  void attach(BoardEmulator* emulator) noexcept;
+
+ private:
+  mutable std::mutex mutex_;
+  BoardEmulator* emulator_ = nullptr;
+};
+
 }  // namespace uhaptics

@@ -24,6 +24,7 @@
 #include <vector>
 
 #include "uhaptics/backends/board_catalog.hpp"
+#include "uhaptics/backends/board_emulator.hpp"
 #include "uhaptics/backends/servo_loop.hpp"
 
 namespace uhaptics {
@@ -34,6 +35,9 @@ struct JointIoOptions {
   /// Servo loop settings (emulated, usb). rate_hz and board_watchdog_us of 0 take the file's values.
   ServoConfig servo = defaultServo();
   ServoRenderer* renderer = nullptr;  // optional, runs in the servo thread (emulated, usb)
+  /// emulated only: the handle through which a test or the soak run injects board faults into the
+  /// open session (BoardEmulatorControl); refused with the other backends.
+  std::shared_ptr<BoardEmulatorControl> emulator_control;
 
   static ServoConfig defaultServo() {
     ServoConfig c;
@@ -41,6 +45,17 @@ struct JointIoOptions {
     return c;
   }
 };
+
+/// What a joint I/O's link to its device is doing, as of its last read().
+enum class LinkStatus : std::uint8_t {
+  kClosed,        // not open
+  kRunning,       // readings arrive, commands go out
+  kConnecting,    // board found again (replugged, rebooted): handshake under way, zero commanded
+  kDisconnected,  // the board is gone (unplugged): nothing sent, the board is unpowered
+  kHostWatchdog,  // no valid STATE for the watchdog's periods (silent board, corrupt frames): zero
+  kStopped,       // the servo loop was stopped (ServoLoop::stop()): no reading is current
+};
+const char* toString(LinkStatus s) noexcept;
 
 class JointIo {
  public:
@@ -85,6 +100,9 @@ class JointIo {
   /// sim: the force [N] of a user the caller simulates on the end effector, in the device model's
   /// task frame (BoardPlant::setUserForce). emulated/usb: ignored (the board's device has its user).
   virtual void setUserForce(const Vec3& force) noexcept { (void)force; }
+
+  /// Why read() has (or has no) reading: kRunning while read() succeeds.
+  virtual LinkStatus linkStatus() const noexcept { return isOpen() ? LinkStatus::kRunning : LinkStatus::kClosed; }
 
   /// The servo loop behind emulated/usb (statistics, events); nullptr for sim or while closed.
   virtual ServoLoop* servoLoop() noexcept { return nullptr; }

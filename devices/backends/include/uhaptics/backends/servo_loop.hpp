@@ -42,7 +42,9 @@ struct ServoConfig {
   void validate() const;              // throws Error
 };
 
-enum class LinkState : std::uint8_t { kConnecting, kRunning, kDisconnected };
+/// kStopped: stop() ended the servo thread; nothing is sent or received any more (the last
+/// snapshot says so instead of holding the last reading).
+enum class LinkState : std::uint8_t { kConnecting, kRunning, kDisconnected, kStopped };
 
 /// Servo -> graphics: the newest device state and what was sent.
 struct DeviceSnapshot {
@@ -129,7 +131,8 @@ class ServoLoop {
   wire::DeviceInfo connect();
   /// Starts the servo thread (after connect()). Returns a note on real-time scheduling.
   std::string start();
-  /// Stops the thread after commanding zero. Idempotent.
+  /// Stops the thread after commanding zero; the last snapshot then reports LinkState::kStopped.
+  /// Idempotent.
   void stop();
   bool running() const noexcept { return running_.load(std::memory_order_acquire); }
 

@@ -99,6 +99,11 @@ class cUhapticsDevice : public cGenericHapticDevice {
   uhaptics::Fault getLastFault();
   const std::string& getDeviceName() const { return m_selection.device; }
   const std::string& getBackendName() const { return m_selection.backend; }
+  /// The link to the device as of the last servo tick: kRunning while readings arrive; otherwise
+  /// why the tick had none and sent zero (silent or corrupt board: kHostWatchdog, unplugged:
+  /// kDisconnected, replugged or rebooted: kConnecting, after getServoLoop()->stop(): kStopped).
+  /// getLastFault() is then kDeviceError; getSessionStats() counts the losses and recoveries.
+  uhaptics::LinkStatus getLinkStatus();
   /// The board's servo loop (timing statistics, events) on the emulated and usb backends while
   /// open; nullptr on sim.
   uhaptics::ServoLoop* getServoLoop();
@@ -222,6 +227,7 @@ class cUhapticsDevice : public cGenericHapticDevice {
   std::uint64_t m_ticks = 0;
   Clock::time_point m_origin;
   uhaptics::Fault m_lastFault = uhaptics::Fault::kNone;
+  uhaptics::LinkStatus m_linkStatus = uhaptics::LinkStatus::kClosed;
   uhaptics::SessionStats m_stats;
   std::string m_statsPath;
   std::thread m_statsWriter;

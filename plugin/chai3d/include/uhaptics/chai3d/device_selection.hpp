@@ -42,6 +42,11 @@ struct DeviceSelection {
   /// the device uses, e.g. a wrapper that records, replays, injects faults or holds the plant still
   /// (the CHAI3D tick benchmark). Empty: the backend's own.
   std::function<std::unique_ptr<JointIo>(std::unique_ptr<JointIo>)> wrap_joint_io;
+  /// Set in code only: the joint-I/O options the device is opened with on the emulated and usb
+  /// backends: servo settings (rate and board watchdog 0 = the parameter file's) and, emulated only,
+  /// emulator_control to inject board faults mid-session. params_dir empty = the default folder;
+  /// renderer must stay empty (the device renders in its own ticks).
+  JointIoOptions joint_io;
 
   /// A device option (options map, else config file, else fallback); validated against [lo, hi].
   double option(const std::string& name, double fallback, double lo, double hi) const;

@@ -29,6 +29,12 @@ struct SessionStatsSnapshot {
   double peak_output = 0.0;         // largest actuator command the device method produced (device units)
   std::uint64_t faults = 0;         // ticks that ended with a Fault (zero command sent)
   bool in_contact = false;          // the latest tick was inside a contact episode
+  /// The board link (emulated, usb): ticks without a reading (zero sent), the episodes of them
+  /// (a silent or unplugged board, a host watchdog trip, a stopped loop), and the episodes that
+  /// ended with readings again. link_losses - link_recoveries is 1 while the link is down, else 0.
+  std::uint64_t ticks_without_reading = 0;
+  std::uint64_t link_losses = 0;
+  std::uint64_t link_recoveries = 0;
   /// Box of the positions the device visited, in workspace radii around the workspace centre (what
   /// CHAI3D maps to world units when a tool's workspace radius is 1); empty (min > max) before a tick.
   std::array<double, 3> visited_min{{1.0, 1.0, 1.0}}, visited_max{{-1.0, -1.0, -1.0}};
@@ -49,6 +55,8 @@ class SessionStats {
   void start(double wall_time) noexcept;
   /// One servo tick. Call from one thread only (the servo thread).
   void recordTick(double commanded_force, double output_magnitude, bool fault) noexcept;
+  /// Whether this tick had a joint reading (servo thread, once per tick).
+  void recordReading(bool have_reading) noexcept;
   /// Where the device is after a tick, in workspace radii (non-finite values are ignored).
   void recordPosition(double x, double y, double z) noexcept;
   /// A command refused before any tick (e.g. non-finite): counted as a fault, not as a tick.
@@ -72,6 +80,8 @@ class SessionStats {
   std::atomic<std::uint64_t> contacts_{0};
   std::atomic<std::uint64_t> contact_ticks_{0};
   std::atomic<std::uint64_t> faults_{0};
+  bool link_down_ = false;  // servo thread only
+  std::atomic<std::uint64_t> ticks_without_reading_{0}, link_losses_{0}, link_recoveries_{0};
   std::atomic<double> peak_force_{0.0};
   std::atomic<double> peak_output_{0.0};
   std::array<std::atomic<double>, 3> visited_min_{}, visited_max_{};
