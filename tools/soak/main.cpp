@@ -13,44 +13,34 @@
 #include <filesystem>
 #include <fstream>
 #include <iostream>
+#include <limits>
 
 #include "soak.hpp"
 #include "uhaptics/chai3d/device_registry.hpp"
+#include "uhaptics/tools/cli.hpp"
 
 int main(int argc, char** argv) {
+  namespace tools = uhaptics::tools;
   CLI::App app{"Soak: each device on the emulated board under random board faults"};
+  app.footer("Exit status: 0 every device passes; 1 a device fails a criterion; 2 the run could not complete; "
+             "101/105 a refused command-line value (conversion/validation).");
+  tools::CommandLine cli(app, "uhaptics-soak");
   std::string device = "all", out = "out/soak";
   double minutes = 10.0, interval = 2.0;
   std::uint64_t seed = 1;
-  long long max_heap_growth = 65536;
-  app.add_option("--device", device, "a device name or all");
-  app.add_option("--minutes", minutes, "real time per device (> 0)");
-  app.add_option("--fault-interval", interval, "mean quiet time between faults [s] (0.05 .. 600)");
-  app.add_option("--seed", seed, "random seed of the fault sequence");
-  app.add_option("--max-heap-growth", max_heap_growth, "largest accepted heap growth after warm-up [bytes]");
-  app.add_option("--out", out, "folder of soak.csv and soak_faults.csv");
-  CLI11_PARSE(app, argc, argv);
-  if (!std::isfinite(minutes) || minutes <= 0.0 || minutes > 10000.0) {
-    std::cerr << "uhaptics-soak: --minutes " << minutes << " is not accepted: a duration in minutes, > 0 and <= 10000\n";
-    return 2;
-  }
-  if (!std::isfinite(interval) || interval < 0.05 || interval > 600.0) {
-    std::cerr << "uhaptics-soak: --fault-interval " << interval << " is not accepted: seconds in 0.05 .. 600\n";
-    return 2;
-  }
-  if (max_heap_growth < 0) {
-    std::cerr << "uhaptics-soak: --max-heap-growth " << max_heap_growth << " is not accepted: bytes >= 0\n";
-    return 2;
-  }
+  std::uint64_t max_heap_growth = 65536;
   std::vector<std::string> devices = uhaptics::adapter::deviceNames();
-  if (device != "all") {
-    if (std::find(devices.begin(), devices.end(), device) == devices.end()) {
-      std::cerr << "uhaptics-soak: --device '" << device << "' is not a device: use all or one of "
-                << uhaptics::adapter::describeDevices() << "\n";
-      return 2;
-    }
-    devices = {device};
-  }
+  std::vector<std::string> choices = devices;
+  choices.push_back("all");
+  cli.choice("--device", device, "a device name or all", choices);
+  cli.number("--minutes", minutes, "real time per device", 0.01, 10000.0);
+  cli.number("--fault-interval", interval, "mean quiet time between faults [s]", 0.05, 600.0);
+  cli.integer("--seed", seed, "random seed of the fault sequence", 0, std::numeric_limits<long long>::max());
+  cli.integer("--max-heap-growth", max_heap_growth, "largest accepted heap growth after warm-up [bytes]", 0,
+              1LL << 40);
+  cli.outputFolder("--out", out, "folder of soak.csv and soak_faults.csv");
+  if (const int status = cli.parse(argc, argv); status >= 0) return status;
+  if (device != "all") devices = {device};
   std::error_code ec;
   std::filesystem::create_directories(out, ec);
   if (ec || !std::filesystem::is_directory(out)) {
@@ -76,7 +66,7 @@ int main(int argc, char** argv) {
                    100.0 * r.max_command_ratio);
     };
     uhaptics::soak::Result r = uhaptics::soak::run(options, progress);
-    const bool passed = r.passed(max_heap_growth);
+    const bool passed = r.passed(static_cast<long long>(max_heap_growth));
     all_passed = all_passed && passed;
     if (!r.error.empty()) {
       std::cout << name << ": " << r.error << "\n";
@@ -103,7 +93,7 @@ int main(int argc, char** argv) {
     }
     return true;
   };
-  if (!write(std::filesystem::path(out) / "soak.csv", uhaptics::soak::summaryCsv(results, max_heap_growth)) ||
+  if (!write(std::filesystem::path(out) / "soak.csv", uhaptics::soak::summaryCsv(results, static_cast<long long>(max_heap_growth))) ||
       !write(std::filesystem::path(out) / "soak_faults.csv", uhaptics::soak::faultsCsv(results)))
     return 2;
   std::cout << "wrote " << out << "/soak.csv and " << out << "/soak_faults.csv\n";
