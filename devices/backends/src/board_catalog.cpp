@@ -18,14 +18,21 @@ BoardSpec boardSpec(const DeviceDefinition& device, const std::string& params_di
 }
 
 BoardSpec boardSpecFromFile(const DeviceDefinition& device, const std::string& path) {
-  const ParamFile file = ParamFile::load(path);
-  BoardSpec b;
+  BoardSpec b = boardSpecFromParams(device, ParamFile::load(path));
   b.params_path = path;
+  return b;
+}
+
+BoardSpec boardSpecFromParams(const DeviceDefinition& device, const ParamFile& file) {
+  BoardSpec b;
+  b.params_path = file.origin();
   b.servo_rate_hz = file.number("usb/servo_rate_hz", 500.0, 10000.0);
   b.sample_rate_hz = file.number("usb/sample_rate_hz", 100.0, 100000.0);
   // The range the protocol's boards accept (PROTOCOL.md, CONFIGURE).
   b.board_watchdog_us = static_cast<std::uint32_t>(file.integer("usb/board_watchdog_us", 1000, 1000000));
   device.describe_board(device, file, b);
+  // The model and the board have read their parts; anything left is a key nobody knows.
+  file.rejectUnreadKeys();
   return b;
 }
 

@@ -81,6 +81,8 @@ DeviceSelection readDeviceSelection(const std::vector<std::string>& devices,
     }
     if (config.has("stats")) selection.stats_path = config.text("stats");
     readHand(config, selection.hand, selection.hand_enabled, selection.hand_path_given);
+    // The device classes read "options/<device>/<name>" when they are made.
+    config.rejectUnreadKeys({"options"});
   }
   if (const auto device = env("UHAPTICS_DEVICE")) {
     selection.device = *device;

@@ -15,6 +15,9 @@ namespace uhaptics {
 BoardSpec boardSpec(const DeviceDefinition& device, const std::string& params_dir);
 /// Same, from a given file (e.g. a lab's copy with its own USB ids).
 BoardSpec boardSpecFromFile(const DeviceDefinition& device, const std::string& path);
+/// Same, from a parsed file (params_path is the file's origin); every key of it must be read by the
+/// model or the board, or it throws Error naming the key and the nearest known one.
+BoardSpec boardSpecFromParams(const DeviceDefinition& device, const ParamFile& file);
 /// For describe_board: a rate stated twice (the model's own and the usb section's) must agree;
 /// fails through the file (naming it and the key) otherwise.
 void requireSameRate(const ParamFile& file, const char* key, double usb_value, double model_value);

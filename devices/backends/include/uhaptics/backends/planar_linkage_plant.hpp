@@ -66,7 +66,7 @@ class PlanarLinkagePlant final : public HeldTorquePlant<N> {
 ///   d.make_plant = &makePlanarLinkagePlant<4, kModel>;
 template <int N, const char* kModel>
 void describePlanarLinkageBoard(const DeviceDefinition& self, const ParamFile& file, BoardSpec& spec) {
-  const PlanarLinkageModel<N> model = PlanarLinkageModel<N>::load(spec.params_path, kModel);
+  const PlanarLinkageModel<N> model = PlanarLinkageModel<N>::fromParams(file, kModel);
   const Vec<N> limits = model.effortLimits();
   spec.descriptor = DeviceDescriptor::fromParams(file, wire::DeviceType{self.wire_code}, self.title, N, N, limits.data());
 }
