@@ -56,6 +56,11 @@ TEST_CASE("a key no loader reads is refused, naming it and the nearest known key
   const auto r = ParamFile::parse(R"({"x": {"value": 1.0, "unti": "m"}})", "entry.json");
   CHECK(r.number("x", 0.0, 2.0) == 1.0);
   CHECK_THROWS_WITH(r.rejectUnreadKeys(), Contains("'x/unti'"));
+  // An empty section whose fields the loader asked for is known (e.g. a selection's "hand": {}); an
+  // empty section nobody asked about is not.
+  const auto e = ParamFile::parse(R"({"hand": {}, "hnad": {}})", "empty.json");
+  CHECK(e.numberOr("hand/lap_time", 4.0, 0.1, 10.0) == 4.0);
+  CHECK_THROWS_WITH(e.rejectUnreadKeys(), Contains("'hnad'") && !Contains("'hand'"));
 }
 
 TEST_CASE("the loader's reads are the file's schema") {

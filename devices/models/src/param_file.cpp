@@ -298,6 +298,9 @@ void ParamFile::rejectUnreadKeys(const std::vector<std::string>& sections_read_e
     known.assign(impl_->asked.begin(), impl_->asked.end());
     for (const auto& leaf : impl_->leaves()) {
       if (impl_->asked.count(leaf)) continue;
+      // An empty section (e.g. "hand": {}) whose fields the loader asked for is known, merely empty.
+      if (std::any_of(impl_->asked.begin(), impl_->asked.end(), [&](const std::string& a) { return isUnder(a, leaf); }))
+        continue;
       const bool elsewhere = std::any_of(sections_read_elsewhere.begin(), sections_read_elsewhere.end(),
                                          [&](const std::string& s) { return isUnder(leaf, s); });
       if (!elsewhere) unread.push_back(leaf);
