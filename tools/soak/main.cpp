@@ -18,6 +18,7 @@
 #include "soak.hpp"
 #include "uhaptics/chai3d/device_registry.hpp"
 #include "uhaptics/tools/cli.hpp"
+#include "uhaptics/tools/plot.hpp"
 
 int main(int argc, char** argv) {
   namespace tools = uhaptics::tools;
@@ -41,11 +42,11 @@ int main(int argc, char** argv) {
   cli.outputFolder("--out", out, "folder of soak.csv and soak_faults.csv");
   if (const int status = cli.parse(argc, argv); status >= 0) return status;
   if (device != "all") devices = {device};
-  std::error_code ec;
-  std::filesystem::create_directories(out, ec);
-  if (ec || !std::filesystem::is_directory(out)) {
-    std::cerr << "uhaptics-soak: --out '" << out << "' is not a folder that can be created: " << ec.message() << "\n";
-    return 2;
+  try {
+    tools::ensureDirectory(out);
+  } catch (const std::exception& e) {
+    std::cerr << "uhaptics-soak: --out: " << e.what() << "\n";
+    return tools::CommandLine::kRunError;
   }
 
   std::vector<uhaptics::soak::Result> results;
@@ -95,7 +96,7 @@ int main(int argc, char** argv) {
   };
   if (!write(std::filesystem::path(out) / "soak.csv", uhaptics::soak::summaryCsv(results, static_cast<long long>(max_heap_growth))) ||
       !write(std::filesystem::path(out) / "soak_faults.csv", uhaptics::soak::faultsCsv(results)))
-    return 2;
+    return tools::CommandLine::kRunError;
   std::cout << "wrote " << out << "/soak.csv and " << out << "/soak_faults.csv\n";
-  return all_passed ? 0 : 1;
+  return all_passed ? tools::CommandLine::kAllPass : tools::CommandLine::kRowsFail;
 }
