@@ -145,3 +145,105 @@ TEST_CASE("Simulated TAU: a delayed plant starts from the first command, not fro
   // At rest with gravity held exactly, the tool does not move (1 nm: rounding).
   CHECK(drift < 1e-9);
 }
+
+namespace {
+// How far beyond its stops the tool may rest: checked to assemble, and not exceeded by an unpowered
+// device under a 10 N push once it has come to rest (a stop holds 10 N at 0.2 mm).
+constexpr double kPositionMargin = 1e-3;
+constexpr double kAngleMargin = 1.5 * M_PI / 180.0;
+
+// Joints that reach `pose`, walked there from home in small steps with the forward kinematics
+// warm-started each step, as a simulation moving continuously would: true if every step assembles
+// in the device's own mode.
+bool assemblesAlongTheWay(const Vec6& pose) {
+  TauData data(model());
+  for (int k = 1; k <= 40; ++k) {
+    const Vec6 x = model().homePose() + (k / 40.0) * (pose - model().homePose());
+    Vec6 q;
+    if (model().inverse(x, q) != Fault::kNone || model().forward(q, data) != Fault::kNone) return false;
+    if ((data.pose - x).cwiseAbs().maxCoeff() > 1e-9) return false;
+  }
+  return true;
+}
+
+// An unpowered TAU under gravity and a steady push on the tool, for 3 s: the largest excursion of
+// the position and of the orientation angles from the workspace centre over the last second (at
+// rest), and the periods that faulted (none: every pose on the way assembled, impacts included).
+struct Excursion {
+  double position = 0.0, angle = 0.0;
+  int faults = 0;
+};
+Excursion unpowered(bool end_stops, const Vec3& push) {
+  SimulatedTauOptions so;
+  so.end_stops = end_stops;
+  so.tool_rotational_damping = 0.01;  // the handle's, as a board plant simulates it
+  SimulatedTau sim(model(), so);
+  sim.reset(model().homeJoints());
+  Excursion e;
+  for (int k = 0; k < 3000; ++k) {
+    if (sim.step(Vec6::Zero(), push) != Fault::kNone) ++e.faults;
+    if (k < 2000) continue;
+    const Vec6 d = sim.pose() - model().homePose();
+    e.position = std::max(e.position, d.head<3>().cwiseAbs().maxCoeff());
+    e.angle = std::max(e.angle, d.tail<3>().cwiseAbs().maxCoeff());
+  }
+  return e;
+}
+}  // namespace
+
+TEST_CASE("Simulated TAU: the end stops bound the workspace inside the assembling range") {
+  const TauModel::EndStops& stops = model().endStops();
+  CHECK(stops.half_side >= model().workspaceHalfSide());
+  CHECK(stops.half_angle >= model().workspaceHalfAngle());
+  // Every corner of the stops' box, position and orientation at once, pressed 1 mm and 1.5 deg into
+  // the stops (farther than the unpowered device goes, below).
+  const double s = stops.half_side + kPositionMargin, a = stops.half_angle + kAngleMargin;
+  int corners = 0;
+  for (int c = 0; c < 64; ++c) {
+    Vec6 pose = model().homePose();
+    for (int i = 0; i < 6; ++i) pose(i) += ((c >> i) & 1 ? 1.0 : -1.0) * (i < 3 ? s : a);
+    INFO("corner " << pose.transpose());
+    CHECK(assemblesAlongTheWay(pose));
+    ++corners;
+  }
+  CHECK(corners == 64);
+}
+
+TEST_CASE("Simulated TAU: unpowered, it comes to rest on its end stops, never where it does not assemble") {
+  const TauModel::EndStops& stops = model().endStops();
+  // Gravity alone, and a 10 N push along each axis on top of it (a hand leaning on a dead device).
+  for (const Vec3& push : {Vec3(0, 0, 0), Vec3(10, 0, 0), Vec3(-10, 0, 0), Vec3(0, 10, 0), Vec3(0, -10, 0),
+                           Vec3(0, 0, 10), Vec3(0, 0, -10)}) {
+    INFO("push " << push.transpose() << " N");
+    const Excursion with = unpowered(true, push);
+    CHECK(with.faults == 0);
+    CHECK(with.position < stops.half_side + kPositionMargin);
+    CHECK(with.angle < stops.half_angle + kAngleMargin);
+  }
+  // Without the stops, gravity alone takes the tool out of the workspace (what the stops are for).
+  const Excursion without = unpowered(false, Vec3::Zero());
+  CHECK((without.faults > 0 || without.position > stops.half_side + kPositionMargin));
+}
+
+TEST_CASE("Simulated TAU: a step that would leave the assembling range stops the joints where they were") {
+  SimulatedTauOptions so;
+  so.quantize = false;
+  SimulatedTau sim(model(), so);
+  sim.reset(model().homeJoints());
+  // Unpowered without stops and pushed hard, until a period faults.
+  Fault f = Fault::kNone;
+  Vec6 q_before = sim.q(), pose_before = sim.pose();
+  for (int k = 0; k < 5000 && f == Fault::kNone; ++k) {
+    q_before = sim.q();
+    pose_before = sim.pose();
+    f = sim.step(Vec6::Zero(), Vec3(0.0, 0.0, 40.0));
+  }
+  REQUIRE(f != Fault::kNone);
+  CHECK(sim.q() == q_before);
+  CHECK(sim.qd().isZero());
+  // pose() is still the solution at q(): the inverse maps it back to the joints.
+  Vec6 q_back;
+  REQUIRE(model().inverse(sim.pose(), q_back) == Fault::kNone);
+  CHECK((q_back - sim.q()).cwiseAbs().maxCoeff() < 1e-9);
+  CHECK((sim.pose() - pose_before).cwiseAbs().maxCoeff() < 1e-9);
+}

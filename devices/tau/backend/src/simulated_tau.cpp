@@ -1,11 +1,25 @@
 #include "uhaptics/backends/simulated_tau.hpp"
 
 #include <Eigen/Cholesky>
+#include <algorithm>
 #include <cmath>
 
 #include "uhaptics/core/limits.hpp"
 
 namespace uhaptics {
+
+namespace {
+// One-sided spring-damper per coordinate beyond +-half of the centre: pushes back, never pulls.
+Vec3 stopForce(const Vec3& x, const Vec3& xd, double half, double stiffness, double damping) noexcept {
+  Vec3 f = Vec3::Zero();
+  for (int i = 0; i < 3; ++i) {
+    const double beyond = x(i) - std::clamp(x(i), -half, half);
+    if (beyond > 0.0) f(i) = std::min(0.0, -stiffness * beyond - damping * xd(i));
+    if (beyond < 0.0) f(i) = std::max(0.0, -stiffness * beyond - damping * xd(i));
+  }
+  return f;
+}
+}  // namespace
 
 SimulatedTau::SimulatedTau(const TauModel& model, const SimulatedTauOptions& options)
     : model_(model), options_(options), data_(model), rng_(options.seed) {
@@ -79,8 +93,13 @@ Fault SimulatedTau::step(const Vec6& tau_command, const Vec3& external_force) no
   const Vec6 q0 = q_;
   const Vec6 qdd_drive = mass.solve(applied_ - data_.bias - data_.gravity);
   const Mat<6, 3> force_to_qdd = mass.solve(Jp.transpose());
+  // Torques on the orientation (Euler angles) act through Jr^T.
+  const Mat<6, 3> torque_to_qdd = mass.solve(Jr.transpose());
   // Rotational damping: a generalized force -b Jr^T (Euler-angle rates), dissipative by construction.
-  const Mat6 rotational_damping = -options_.tool_rotational_damping * mass.solve(Jr.transpose()) * Jr;
+  const Mat6 rotational_damping = -options_.tool_rotational_damping * torque_to_qdd * Jr;
+  const TauModel::EndStops& stops = model_.endStops();
+  const Vec3 centre = model_.homePose().head<3>();
+  const Vec3 a0 = data_.pose.tail<3>() - model_.homePose().tail<3>();
   const double T = model_.servoPeriod();
   const double dt = T / options_.substeps;
   Vec6 q = q_, qd = qd_;
@@ -97,13 +116,17 @@ Fault SimulatedTau::step(const Vec6& tau_command, const Vec3& external_force) no
       hand_sum += fh;
       force += fh;
     }
-    const Vec6 qdd = qdd_drive + force_to_qdd * force + rotational_damping * qd;
+    Vec6 qdd = qdd_drive + rotational_damping * qd;
+    if (options_.end_stops) {
+      force += stopForce(p - centre, v, stops.half_side, stops.stiffness, stops.damping);
+      qdd.noalias() += torque_to_qdd * stopForce(a0 + Jr * (q - q0), Jr * qd, stops.half_angle, stops.angular_stiffness,
+                                                 stops.angular_damping);
+    }
+    qdd.noalias() += force_to_qdd * force;
     qd += dt * qdd;  // semi-implicit Euler: velocity first
     q += dt * qd;
   }
   if (!q.allFinite() || !qd.allFinite()) return Fault::kNonFiniteResult;
-  q_ = q;
-  qd_ = qd;
   hand_force_ = hand_sum / options_.substeps;
   if (hand_attached_) {
     hand_p_ += hand_v_ * T + 0.5 * T * T * hand_a_;
@@ -113,9 +136,18 @@ Fault SimulatedTau::step(const Vec6& tau_command, const Vec3& external_force) no
   // Keep pose/J current for observers, Newton warm-started from the first-order prediction
   // X + J dq (usually one iteration).
   const Vec6 pose_before = data_.pose;
-  data_.pose.noalias() += data_.J * (q_ - q0);
-  f = model_.forward(q_, data_);
-  if (f != Fault::kNone) data_.pose = pose_before;  // pose() stays the last solution
+  data_.pose.noalias() += data_.J * (q - q0);
+  f = model_.forward(q, data_);
+  if (f != Fault::kNone) {
+    // No assembly at q: the mechanism cannot get there. It stops where it was; pose() and J are
+    // solved again at q_ (forward() used them as scratch), from the solution they had.
+    data_.pose = pose_before;
+    qd_.setZero();
+    if (model_.forward(q_, data_) != Fault::kNone) data_.pose = pose_before;
+    return f;
+  }
+  q_ = q;
+  qd_ = qd;
   quantize();
   return f;
 }

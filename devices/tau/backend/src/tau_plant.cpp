@@ -9,6 +9,7 @@ SimulatedTauOptions tauOptions(const TauBoardPlant::Options& o) {
   SimulatedTauOptions s;
   s.hand = o.hand;
   s.quantize = o.quantize;
+  s.end_stops = o.end_stops;
   s.tool_damping = o.tool_damping;
   s.tool_rotational_damping = o.tool_rotational_damping;
   return s;

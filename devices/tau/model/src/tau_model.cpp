@@ -46,6 +46,13 @@ TauModel TauModel::fromParams(const ParamFile& p) {
   m.workspace_half_side_ = p.number("workspace/half_side", 1e-3, 0.5);
   m.workspace_half_angle_ = p.number("workspace/half_angle_deg", 0.0, 60.0) * M_PI / 180.0;
   m.characteristic_length_ = p.number("workspace/characteristic_length", 1e-3, 1.0);
+  // The stops bound the workspace (at or outside its faces).
+  m.end_stops_.half_side = p.number("end_stops/half_side", m.workspace_half_side_, 0.5);
+  m.end_stops_.half_angle = p.number("end_stops/half_angle_deg", m.workspace_half_angle_ * 180.0 / M_PI, 60.0) * M_PI / 180.0;
+  m.end_stops_.stiffness = p.number("end_stops/stiffness", 1.0, 1e6);
+  m.end_stops_.damping = p.number("end_stops/damping", 0.0, 1e3);
+  m.end_stops_.angular_stiffness = p.number("end_stops/angular_stiffness", 1e-3, 1e3);
+  m.end_stops_.angular_damping = p.number("end_stops/angular_damping", 0.0, 10.0);
   m.fk_tolerance_ = p.number("forward_kinematics/tolerance", 1e-15, 1e-6);
   m.fk_max_iterations_ = static_cast<int>(p.integer("forward_kinematics/max_iterations", 1, 1000));
   m.gravity_ = Vec3(0.0, 0.0, -p.number("gravity", 0.0, 20.0));

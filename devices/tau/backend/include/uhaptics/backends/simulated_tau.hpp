@@ -2,8 +2,8 @@
 // Simulated TAU: integrates the lumped dynamic model at a finer step than the 1 kHz controller,
 // with joint torque saturation, encoder quantization, an optional random transport delay of the
 // command (0..N whole samples, as in paper 001's CoS-D runs), optional mechanical damping at the
-// tool (the baseline's 4 Ns/m, translational and rotational) and a hand model (spring-damper between
-// the tool and a moving hand).
+// tool (the baseline's 4 Ns/m, translational and rotational), optional mechanical end stops (the
+// model's TauModel::EndStops) and a hand model (spring-damper between the tool and a moving hand).
 //
 // Multi-rate integration: the configuration-dependent terms (forward kinematics, J, M, gravity,
 // velocity terms) are refreshed once per servo period; the substeps integrate with them frozen
@@ -32,6 +32,9 @@ struct SimulatedTauOptions {
   double tool_damping = 0.0;      // mechanical damping at the tool, translational, N s/m
   double tool_rotational_damping = 0.0;  // on the tool's orientation (Euler-angle) rates, N m s/rad
   bool quantize = true;           // encoder quantization (false: ideal sensor, for design checks)
+  // The device's mechanical stops (TauModel::endStops()). Off for paper 001's study, whose runs stay
+  // in the workspace; on where the device may go unpowered (a board plant, a fault).
+  bool end_stops = false;
   std::uint64_t seed = 1;         // delay draws
   HandModel hand;
 };
@@ -48,7 +51,9 @@ class SimulatedTau {
   void detachHand() noexcept { hand_attached_ = false; }
 
   /// One servo period with command tau (saturated here) and an external tool force held constant
-  /// over the period. Returns a Fault if the model fails (the state is then left unchanged).
+  /// over the period. Returns a Fault if the model fails: before the period, the state is left
+  /// unchanged; at its end (the joints would leave the range where the mechanism assembles), the
+  /// joints stay where they were and stop, as against a geometric stop, and time advances.
   Fault step(const Vec6& tau_command, const Vec3& external_force) noexcept;
 
   const Vec6& encoderReading() const noexcept { return reading_; }

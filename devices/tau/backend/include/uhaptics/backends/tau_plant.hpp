@@ -18,6 +18,7 @@ class TauBoardPlant final : public HeldTorquePlant<6> {
     bool hold_tool = true;            // false: no hand of its own; setUserForce is the user
     double tool_damping = 0.0;        // mechanical damping at the tool [N s/m]
     bool quantize = true;             // 4096-count encoders
+    bool end_stops = true;            // the device's mechanical stops (TauModel::endStops())
     // The simulated handle's rotational damping [N m s/rad], as cTauDevice's default: the hand holds
     // only the tool's position, and the host's command arrives 1-2 sample periods after the reading
     // it was computed from (COMMAND/STATE exchange), which the undamped orientation does not

@@ -41,6 +41,20 @@ class TauModel {
     Vec3 body_point;  // platform frame
   };
 
+  /// The mechanical stops that bound the tool's travel, as a simulation models them: one-sided
+  /// spring-dampers on each position coordinate beyond +-half_side of the workspace centre and on
+  /// each orientation angle beyond +-half_angle. They bound the workspace, inside the range where
+  /// the mechanism assembles, so an unpowered device rests on them instead of sagging to where its
+  /// kinematics have no solution.
+  struct EndStops {
+    double half_side = 0.025;         // m
+    double half_angle = 0.175;        // rad
+    double stiffness = 5e4;           // N/m
+    double damping = 300.0;           // N s/m
+    double angular_stiffness = 30.0;  // N m/rad
+    double angular_damping = 0.3;     // N m s/rad
+  };
+
   /// Loads and validates a parameter file (devices/params/tau.json); throws uhaptics::Error naming
   /// the file and field.
   static TauModel load(const std::string& path);
@@ -90,6 +104,7 @@ class TauModel {
   double workspaceHalfSide() const noexcept { return workspace_half_side_; }
   double workspaceHalfAngle() const noexcept { return workspace_half_angle_; }
   double characteristicLength() const noexcept { return characteristic_length_; }
+  const EndStops& endStops() const noexcept { return end_stops_; }
   double fkTolerance() const noexcept { return fk_tolerance_; }
   int fkMaxIterations() const noexcept { return fk_max_iterations_; }
   const Vec3& gravityVector() const noexcept { return gravity_; }
@@ -118,6 +133,7 @@ class TauModel {
   double workspace_half_side_ = 0.025;
   double workspace_half_angle_ = 10.0 * M_PI / 180.0;
   double characteristic_length_ = 0.05;
+  EndStops end_stops_;
   double fk_tolerance_ = 1e-12;
   int fk_max_iterations_ = 30;
   double assembly_mode_sign_ = 0.0;  // sign of det(dg/dX) at home (0: not known yet, no check)
