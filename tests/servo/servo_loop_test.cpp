@@ -148,8 +148,9 @@ TEST_CASE("normal operation: each device through its renderer at 1 kHz for 3 s, 
       WARN(c.name() << ": " << k.host_watchdog_trips << " host watchdog trip(s) (servo thread stalled), each zeroed and resumed");
     }
     if (kRealTimeBounds && k.host_watchdog_trips == 0) {
-      // A trip zeroes the TAU's gravity compensation and lets the tool sag out of the workspace:
-      // the renderer then faults (correctly). Without trips it must not.
+      // A trip zeroes the TAU's gravity compensation and drops the tool toward its end stops, far
+      // from where the renderer was holding it; what it reports then is not under test here.
+      // Without trips it must not fault.
       CHECK(renderer->faults() == 0);
       // At least half the nominal cycles in 3 s: a bound only a broken loop (not a busy machine) fails.
       CHECK(static_cast<double>(k.ticks) > 0.5 * 3.0 * cfg.rate_hz);
