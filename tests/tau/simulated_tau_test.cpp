@@ -198,15 +198,12 @@ TEST_CASE("Simulated TAU: the end stops bound the workspace inside the assemblin
   // Every corner of the stops' box, position and orientation at once, pressed 1 mm and 1.5 deg into
   // the stops (farther than the unpowered device goes, below).
   const double s = stops.half_side + kPositionMargin, a = stops.half_angle + kAngleMargin;
-  int corners = 0;
   for (int c = 0; c < 64; ++c) {
     Vec6 pose = model().homePose();
     for (int i = 0; i < 6; ++i) pose(i) += ((c >> i) & 1 ? 1.0 : -1.0) * (i < 3 ? s : a);
     INFO("corner " << pose.transpose());
     CHECK(assemblesAlongTheWay(pose));
-    ++corners;
   }
-  CHECK(corners == 64);
 }
 
 TEST_CASE("Simulated TAU: unpowered, it comes to rest on its end stops, never where it does not assemble") {

@@ -48,7 +48,7 @@ class TauModel {
   /// kinematics have no solution.
   struct EndStops {
     double half_side = 0.025;         // m
-    double half_angle = 0.175;        // rad
+    double half_angle = 10.0 * M_PI / 180.0;  // rad
     double stiffness = 5e4;           // N/m
     double damping = 300.0;           // N s/m
     double angular_stiffness = 30.0;  // N m/rad
