@@ -93,10 +93,11 @@ Fault SimulatedTau::step(const Vec6& tau_command, const Vec3& external_force) no
   const Vec6 q0 = q_;
   const Vec6 qdd_drive = mass.solve(applied_ - data_.bias - data_.gravity);
   const Mat<6, 3> force_to_qdd = mass.solve(Jp.transpose());
-  // Torques on the orientation (Euler angles) act through Jr^T.
-  const Mat<6, 3> torque_to_qdd = mass.solve(Jr.transpose());
   // Rotational damping: a generalized force -b Jr^T (Euler-angle rates), dissipative by construction.
-  const Mat6 rotational_damping = -options_.tool_rotational_damping * torque_to_qdd * Jr;
+  const Mat6 rotational_damping = -options_.tool_rotational_damping * mass.solve(Jr.transpose()) * Jr;
+  // The angular stops' torques on the orientation (Euler angles) act through Jr^T.
+  Mat<6, 3> torque_to_qdd = Mat<6, 3>::Zero();
+  if (options_.end_stops) torque_to_qdd = mass.solve(Jr.transpose());
   const TauModel::EndStops& stops = model_.endStops();
   const Vec3 centre = model_.homePose().head<3>();
   const Vec3 a0 = data_.pose.tail<3>() - model_.homePose().tail<3>();
@@ -116,13 +117,11 @@ Fault SimulatedTau::step(const Vec6& tau_command, const Vec3& external_force) no
       hand_sum += fh;
       force += fh;
     }
-    Vec6 qdd = qdd_drive + rotational_damping * qd;
-    if (options_.end_stops) {
-      force += stopForce(p - centre, v, stops.half_side, stops.stiffness, stops.damping);
-      qdd.noalias() += torque_to_qdd * stopForce(a0 + Jr * (q - q0), Jr * qd, stops.half_angle, stops.angular_stiffness,
-                                                 stops.angular_damping);
-    }
-    qdd.noalias() += force_to_qdd * force;
+    if (options_.end_stops) force += stopForce(p - centre, v, stops.half_side, stops.stiffness, stops.damping);
+    Vec6 qdd = qdd_drive + force_to_qdd * force + rotational_damping * qd;
+    if (options_.end_stops)
+      qdd.noalias() += torque_to_qdd * stopForce(a0 + Jr * (q - q0), Jr * qd, stops.half_angle,
+                                                 stops.angular_stiffness, stops.angular_damping);
     qd += dt * qdd;  // semi-implicit Euler: velocity first
     q += dt * qd;
   }
