@@ -76,6 +76,7 @@ class TauModel {
   const Selection& selection() const noexcept { return selection_; }
 
   // --- dynamics (all need a successful forward(q, data) first) ------------------------------
+  // They use its pose, J, closure residual data.g and factorization data.lu, and leave them as they are.
   /// Mass matrix, gravity torque and (if qd != 0) velocity term into data.M, data.gravity, data.bias.
   Fault computeDynamicsTerms(const Vec6& q, const Vec6& qd, TauData& data) const noexcept;
   /// Gravity torque only (what a gravity-compensating controller needs), into data.gravity.
@@ -146,8 +147,8 @@ struct TauData {
   Mat6 J = Mat6::Zero();     // dX/dq at pose
   Mat6 dg_dpose = Mat6::Zero();
   Mat6 dg_dq = Mat6::Zero();
-  Vec6 g = Vec6::Zero();
-  Eigen::PartialPivLU<Mat6> lu;  // scratch: factorization of dg/dX
+  Vec6 g = Vec6::Zero();         // closure residual at pose (Newton's scratch during forward())
+  Eigen::PartialPivLU<Mat6> lu;  // factorization of dg/dX at pose (likewise)
   double fk_residual = 0.0;  // max |g_i| (m) at the returned pose
   int fk_iterations = 0;
   Mat6 M = Mat6::Zero();
