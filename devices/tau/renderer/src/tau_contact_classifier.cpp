@@ -34,6 +34,10 @@ constexpr double kProbeGain = 0.1;
 // The proxy's path: the chord over this length of it (long against the proxy's jitter, short
 // against curvature: the chord of a 15 mm radius is 1 deg off its tangent).
 constexpr double kChord = 5e-4;  // m
+// The steepest rise off the wall's plane one step of the proxy's path may make, against its run
+// along the plane (30 deg: the normal follows a steeper surface by its force and by the steps that
+// do fit, and a hop of CHAI3D's proxy is 0.1 mm against a slow slip's micrometres).
+constexpr double kMaxSlope = 0.577;
 // The plane's offset along its normal follows the proxy with this gain per new force (5 ms), and
 // at most 50 mm/s (twice a brisk hand): a proxy jumping across a mesh's thin feature gives the LQR a
 // ramp, not a step.
@@ -109,16 +113,30 @@ void TauContactClassifier::trackSurface(const Vec3& force, const Vec3& position,
     return;
   }
   // The application's proxy: its force is F = k (proxy - tool).
-  proxy_ = position + force / stiffness;
+  const Vec3 proxy = position + force / stiffness;
+  // The trail records the proxy's path with each step's rise off the surface limited to kMaxSlope
+  // of its run along it. CHAI3D's finger proxy hops off a face by up to its epsilon in a single
+  // step; over a slow slip's few micrometres of run that hop is no slope of the surface, and in a
+  // kChord chord it would read as one (0.1 mm in 0.5 mm: 11 deg). A surface that really curves
+  // rises by run^2 / 2R in a step, far inside the limit.
+  Vec3 point = proxy;
+  if (trail_count_ > 0) {
+    const Vec3 step = proxy - proxy_;
+    const double rise = step.dot(normal_);
+    const double run = (step - rise * normal_).norm();
+    const double limit = kMaxSlope * run;
+    point = trail_[trail_head_] + step - (rise - std::clamp(rise, -limit, limit)) * normal_;
+  }
+  proxy_ = proxy;
   has_proxy_ = true;
   trail_head_ = (trail_head_ + 1) % kTrailLength;
-  trail_[trail_head_] = proxy_;
+  trail_[trail_head_] = point;
   trail_count_ = std::min(trail_count_ + 1, kTrailLength);
   // The proxy's path: the chord back to where it was kChord ago, if that is in the trail (a proxy
   // that moved less is stuck by static friction, or stopped in a concave edge).
   Vec3 path = Vec3::Zero();
   for (int i = 1; i < trail_count_; ++i) {
-    const Vec3 travel = proxy_ - trail_[(trail_head_ + kTrailLength - i) % kTrailLength];
+    const Vec3 travel = point - trail_[(trail_head_ + kTrailLength - i) % kTrailLength];
     const double length = travel.norm();
     if (length >= kChord) {
       path = travel / length;
