@@ -106,6 +106,14 @@ TEST_CASE("TAU dynamics: symmetric positive mass matrix, gravity = gradient of p
   REQUIRE(m.forward(q, d) == Fault::kNone);
   REQUIRE(m.computeDynamicsTerms(q, Vec6::Zero(), d) == Fault::kNone);
   CHECK((d.M - d.M.transpose()).norm() < 1e-14);
+  // Kinetic energy of every lumped mass: the rotors (their inertia about the axes, link and rod
+  // halves included) plus each platform point's m |S_c J qd|^2 / 2.
+  Mat6 M = m.jointInertia().asDiagonal();
+  for (const auto& pm : m.platformMasses()) {
+    const Mat<3, 6> T = PoseRotation(d.pose).pointJacobian(pm.body_point) * d.J;
+    M += pm.mass * T.transpose() * T;
+  }
+  CHECK((d.M - M).norm() < 1e-12 * M.norm());
   CHECK(Eigen::SelfAdjointEigenSolver<Mat6>(d.M).eigenvalues().minCoeff() > 0.0);
   // Potential energy V(q) = -sum m g.x over every lumped mass; the gravity torque is dV/dq.
   auto potential = [&](const Vec6& qq) {

@@ -8,21 +8,31 @@
 
 namespace uhaptics {
 
-PoseRotation::PoseRotation(const Vec6& pose) noexcept {
+Mat3 PoseRotation::rotation(const Vec6& pose) noexcept {
   const double ca = std::cos(pose(3)), sa = std::sin(pose(3));
   const double cb = std::cos(pose(4)), sb = std::sin(pose(4));
   const double cg = std::cos(pose(5)), sg = std::sin(pose(5));
-  Mat3 Rx, Ry, Rz, dRx, dRy, dRz;
-  Rx << 1, 0, 0, 0, ca, -sa, 0, sa, ca;
-  Ry << cb, 0, sb, 0, 1, 0, -sb, 0, cb;
-  Rz << cg, -sg, 0, sg, cg, 0, 0, 0, 1;
-  dRx << 0, 0, 0, 0, -sa, -ca, 0, ca, -sa;
-  dRy << -sb, 0, cb, 0, 0, 0, -cb, 0, -sb;
-  dRz << -sg, -cg, 0, cg, -sg, 0, 0, 0, 0;
-  R = Rz * Ry * Rx;
-  dR[0] = Rz * Ry * dRx;
-  dR[1] = Rz * dRy * Rx;
-  dR[2] = dRz * Ry * Rx;
+  // Rz(gamma) Ry(beta) Rx(alpha), multiplied out.
+  Mat3 R;
+  R << cg * cb, cg * sb * sa - sg * ca, cg * sb * ca + sg * sa,  //
+      sg * cb, sg * sb * sa + cg * ca, sg * sb * ca - cg * sa,   //
+      -sb, cb * sa, cb * ca;
+  return R;
+}
+
+PoseRotation::PoseRotation(const Vec6& pose) noexcept : R(rotation(pose)) {
+  // Each angle turns about its own axis in the product Rz Ry Rx: dRx/dalpha = Rx [e_x]x, so
+  // dR/dalpha = R [e_x]x; dR/dgamma = [e_z]x R; dR/dbeta = Rz Ry [e_y]x Rx = [Rz e_y]x R.
+  const double cg = std::cos(pose(5)), sg = std::sin(pose(5));
+  dR[0].col(0).setZero();
+  dR[0].col(1) = R.col(2);
+  dR[0].col(2) = -R.col(1);
+  Mat3 w;  // [Rz e_y]x, Rz e_y = (-sin gamma, cos gamma, 0)
+  w << 0.0, 0.0, cg, 0.0, 0.0, sg, -cg, -sg, 0.0;
+  dR[1].noalias() = w * R;
+  dR[2].row(0) = -R.row(1);
+  dR[2].row(1) = R.row(0);
+  dR[2].row(2).setZero();
 }
 
 Mat<3, 6> PoseRotation::pointJacobian(const Vec3& c) const noexcept {
@@ -103,6 +113,17 @@ void RusLegKinematics::constraints(const Vec6& pose, const Vec6& q, Vec6& g, Mat
     g(i) = 0.5 * (d.squaredNorm() - l.rod_length * l.rod_length) * inv;
     dg_dpose.row(i) = inv * d.transpose() * rot.pointJacobian(l.platform_point);
     dg_dq(i, i) = -inv * d.dot(dtip);
+  }
+}
+
+void RusLegKinematics::closure(const Vec6& pose, const Vec6& q, Vec6& g) const noexcept {
+  const Mat3 R = PoseRotation::rotation(pose);
+  const Vec3 p = pose.head<3>();
+  for (int i = 0; i < 6; ++i) {
+    const Leg& l = legs_[i];
+    const double c = std::cos(q(i)), s = std::sin(q(i));
+    const Vec3 d = p + R * l.platform_point - (l.base + l.link_length * (c * l.zero_direction + s * l.lift_direction));
+    g(i) = 0.5 * (d.squaredNorm() - l.rod_length * l.rod_length) / l.rod_length;
   }
 }
 

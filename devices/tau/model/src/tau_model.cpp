@@ -84,6 +84,16 @@ void TauModel::finalize() {
       throw Error("links/com_radius of joint " + std::to_string(i + 1) + " exceeds its link length");
     if (rod_mass_(i) > 0.0) platform_masses_.push_back({0.5 * rod_mass_(i), kinematics_->platformAttachment(i)});
   }
+  // The platform's lumped masses (platform, handle, rod halves) move as one rigid body: its
+  // dynamics need only their total mass and their first and second moments about the tool centre.
+  body_mass_ = 0.0;
+  body_first_moment_.setZero();
+  body_second_moment_.setZero();
+  for (const PointMass& pm : platform_masses_) {
+    body_mass_ += pm.mass;
+    body_first_moment_ += pm.mass * pm.body_point;
+    body_second_moment_ += pm.mass * pm.body_point * pm.body_point.transpose();
+  }
   if (inverse(home_pose_, home_q_) != Fault::kNone)
     throw Error("the home pose (workspace centre) is not reachable with this geometry");
   TauData data(*this);
@@ -94,6 +104,7 @@ void TauModel::finalize() {
   Vec6 rotor_total = joint_inertia_;
   for (int i = 0; i < 6; ++i) {
     const double L1 = kinematics_->linkLength(i);
+    link_lever_(i) = link_mass_(i) * link_com_radius_(i) + 0.5 * rod_mass_(i) * L1;
     rotor_total(i) += link_mass_(i) * link_com_radius_(i) * link_com_radius_(i) + 0.5 * rod_mass_(i) * L1 * L1;
     if (!(rotor_total(i) > 0.0)) throw Error("joint " + std::to_string(i + 1) + " has zero inertia");
   }
@@ -137,7 +148,13 @@ Fault TauModel::forward(const Vec6& q, TauData& data) const noexcept {
   data.fk_iterations = iterations;
   if (f != Fault::kNone) return f;
   data.pose = X;
-  data.J.noalias() = -data.lu.solve(data.dg_dq);
+  // dg/dq is diagonal (leg i's closure depends on joint i alone): J's columns are dg/dX^-1's,
+  // scaled. Solved a column at a time: Eigen's matrix right-hand side takes its blocked path, which
+  // for 6x6 costs more than six vector solves.
+  for (int i = 0; i < 6; ++i) {
+    data.J.col(i) = data.lu.solve(Vec6::Unit(i));
+    data.J.col(i) *= -data.dg_dq(i, i);
+  }
   return data.J.allFinite() ? Fault::kNone : Fault::kSingular;
 }
 
@@ -153,29 +170,41 @@ void TauModel::jacobian(const Vec6& q, Mat6& J) const noexcept {
   else J.setConstant(std::numeric_limits<double>::quiet_NaN());
 }
 
-void TauModel::computeGravity(const Vec6& q, TauData& data) const noexcept {
-  const PoseRotation rot(data.pose);
-  Vec6 gen = Vec6::Zero();  // generalized force conjugate to X that holds the platform masses
-  for (const PointMass& pm : platform_masses_) gen.noalias() -= pm.mass * rot.pointJacobian(pm.body_point).transpose() * gravity_;
+void TauModel::computeGravity(const Vec6& q, TauData& data) const noexcept { computeGravity(q, PoseRotation(data.pose), data); }
+
+void TauModel::computeGravity(const Vec6& q, const PoseRotation& rot, TauData& data) const noexcept {
+  // Generalized force conjugate to X that holds the platform's masses: -sum m S_c^T g, with
+  // S_c = d(p + R c)/dX = [I, dR_a c, dR_b c, dR_g c] linear in c, i.e. -[M g; (dR_k mu) . g].
+  Vec6 gen;
+  gen.head<3>() = -body_mass_ * gravity_;
+  for (int k = 0; k < 3; ++k) gen(3 + k) = -(rot.dR[k] * body_first_moment_).dot(gravity_);
   data.gravity.noalias() = data.J.transpose() * gen;
   for (int i = 0; i < 6; ++i) {
+    // A point at radius r along link i moves r times as fast as the link's unit point: the link's
+    // centre of mass and the rod's half-mass at its tip act through one derivative.
     Vec3 point, dpoint;
-    const double L1 = kinematics_->linkLength(i);
-    kinematics_->linkPoint(i, q(i), link_com_radius_(i), point, dpoint);
-    data.gravity(i) -= link_mass_(i) * dpoint.dot(gravity_);
-    kinematics_->linkPoint(i, q(i), L1, point, dpoint);
-    data.gravity(i) -= 0.5 * rod_mass_(i) * dpoint.dot(gravity_);
+    kinematics_->linkPoint(i, q(i), 1.0, point, dpoint);
+    data.gravity(i) -= link_lever_(i) * dpoint.dot(gravity_);
   }
 }
 
 Fault TauModel::computeDynamicsTerms(const Vec6& q, const Vec6& qd, TauData& data) const noexcept {
   const PoseRotation rot(data.pose);
-  data.M = joint_inertia_.asDiagonal();
-  for (const PointMass& pm : platform_masses_) {
-    const Mat<3, 6> T = rot.pointJacobian(pm.body_point) * data.J;
-    data.M.noalias() += pm.mass * T.transpose() * T;
+  // The platform's inertia in pose coordinates, sum m S_c^T S_c: [M I, dR_k mu; ., tr(dR_k^T dR_l C)]
+  // with mu = sum m c and C = sum m c c^T; then M(q) = rotors + J^T M_X J.
+  std::array<Mat3, 3> dRC;
+  for (int k = 0; k < 3; ++k) dRC[k].noalias() = rot.dR[k] * body_second_moment_;
+  Mat6 MX;
+  MX.topLeftCorner<3, 3>() = body_mass_ * Mat3::Identity();
+  for (int k = 0; k < 3; ++k) {
+    const Vec3 column = rot.dR[k] * body_first_moment_;
+    MX.block<3, 1>(0, 3 + k) = column;
+    MX.block<1, 3>(3 + k, 0) = column.transpose();
+    for (int l = 0; l <= k; ++l) MX(3 + k, 3 + l) = MX(3 + l, 3 + k) = rot.dR[k].cwiseProduct(dRC[l]).sum();
   }
-  computeGravity(q, data);
+  data.M = joint_inertia_.asDiagonal();
+  data.M.noalias() += data.J.transpose() * MX * data.J;
+  computeGravity(q, rot, data);
   data.bias.setZero();
   const double speed = qd.cwiseAbs().maxCoeff();
   if (!std::isfinite(speed)) return Fault::kNonFiniteInput;
@@ -188,19 +217,19 @@ Fault TauModel::computeDynamicsTerms(const Vec6& q, const Vec6& qd, TauData& dat
   const double h = 1e-3 / speed;  // joint step of at most 1 mrad
   const Vec6 Xd = data.J * qd;
   Vec6 g_plus, g_minus;
-  Mat6 dg_dpose, dg_dq;  // unused partial derivatives
-  kinematics_->constraints(data.pose + h * Xd, q + h * qd, g_plus, dg_dpose, dg_dq);
-  kinematics_->constraints(data.pose - h * Xd, q - h * qd, g_minus, dg_dpose, dg_dq);
+  kinematics_->closure(data.pose + h * Xd, q + h * qd, g_plus);
+  kinematics_->closure(data.pose - h * Xd, q - h * qd, g_minus);
   const double inv_h2 = 1.0 / (h * h);
   const Vec6 Xdd = -data.lu.solve((g_plus - 2.0 * data.g + g_minus) * inv_h2);
   if (!Xdd.allFinite()) return Fault::kNonFiniteResult;
-  // A point x = p + R(angles) c: x'' = S X'' + the second derivative of R c along the angle rates.
-  const PoseRotation rp(data.pose + h * Xd), rm(data.pose - h * Xd);
-  for (const PointMass& pm : platform_masses_) {
-    const Mat<3, 6> S = rot.pointJacobian(pm.body_point);
-    const Vec3 accel = S * Xdd + (rp.R * pm.body_point - 2.0 * (rot.R * pm.body_point) + rm.R * pm.body_point) * inv_h2;
-    data.bias.noalias() += pm.mass * (S * data.J).transpose() * accel;
-  }
+  // A point x = p + R(angles) c: x'' = S_c X'' + D c, D the second difference of R along the angle
+  // rates. Summed over the masses, sum m S_c^T x'' = M_X X'' + [D mu; tr(dR_k^T D C)].
+  const Mat3 D = (PoseRotation::rotation(data.pose + h * Xd) - 2.0 * rot.R + PoseRotation::rotation(data.pose - h * Xd)) * inv_h2;
+  const Mat3 DC = D * body_second_moment_;
+  Vec6 body_force = MX * Xdd;
+  body_force.head<3>() += D * body_first_moment_;
+  for (int k = 0; k < 3; ++k) body_force(3 + k) += rot.dR[k].cwiseProduct(DC).sum();
+  data.bias.noalias() = data.J.transpose() * body_force;
   return Fault::kNone;
 }
 

@@ -22,6 +22,8 @@ struct PoseRotation {
   Mat3 R;
   std::array<Mat3, 3> dR;  // dR/dalpha, dR/dbeta, dR/dgamma
   explicit PoseRotation(const Vec6& pose) noexcept;
+  /// R alone, for callers that need no derivatives.
+  static Mat3 rotation(const Vec6& pose) noexcept;
   /// d(p + R c)/dX for a body point c (3 x 6): [I, dR_a c, dR_b c, dR_g c].
   Mat<3, 6> pointJacobian(const Vec3& body_point) const noexcept;
 };
@@ -36,6 +38,12 @@ class TauKinematics {
   /// Loop-closure equations g(X, q) = 0 (one per actuated chain, in metres) and their partial
   /// derivatives. The forward kinematics solves them for X by Newton's method.
   virtual void constraints(const Vec6& pose, const Vec6& q, Vec6& g, Mat6& dg_dpose, Mat6& dg_dq) const noexcept = 0;
+  /// g(X, q) alone (the dynamics' velocity term differentiates it along the motion). The default
+  /// evaluates constraints() and drops the derivatives.
+  virtual void closure(const Vec6& pose, const Vec6& q, Vec6& g) const noexcept {
+    Mat6 dg_dpose, dg_dq;
+    constraints(pose, q, g, dg_dpose, dg_dq);
+  }
 
   /// A point at `radius` along the link driven by joint i (world frame) and its derivative dq_i.
   virtual void linkPoint(int joint, double q_joint, double radius, Vec3& point, Vec3& dpoint_dq) const noexcept = 0;
@@ -69,6 +77,7 @@ class RusLegKinematics final : public TauKinematics {
 
   Fault inverse(const Vec6& pose, Vec6& q) const noexcept override;
   void constraints(const Vec6& pose, const Vec6& q, Vec6& g, Mat6& dg_dpose, Mat6& dg_dq) const noexcept override;
+  void closure(const Vec6& pose, const Vec6& q, Vec6& g) const noexcept override;
   void linkPoint(int joint, double q_joint, double radius, Vec3& point, Vec3& dpoint_dq) const noexcept override;
   double linkLength(int joint) const noexcept override { return legs_[joint].link_length; }
   Vec3 platformAttachment(int joint) const noexcept override { return legs_[joint].platform_point; }

@@ -110,6 +110,8 @@ class TauModel {
   int fkMaxIterations() const noexcept { return fk_max_iterations_; }
   const Vec3& gravityVector() const noexcept { return gravity_; }
   const std::vector<PointMass>& platformMasses() const noexcept { return platform_masses_; }
+  /// Inertia about each joint axis: rotor, link, and the rod's half at the link tip (kg m^2).
+  const Vec6& jointInertia() const noexcept { return joint_inertia_; }
   const Vec6& linkMass() const noexcept { return link_mass_; }
   const Vec6& linkComRadius() const noexcept { return link_com_radius_; }
   const Vec6& rodMass() const noexcept { return rod_mass_; }
@@ -117,6 +119,8 @@ class TauModel {
  private:
   TauModel() = default;
   void finalize();
+  void computeGravity(const Vec6& q, const PoseRotation& rot, TauData& data) const noexcept;
+
   std::shared_ptr<const TauKinematics> kinematics_;
   Selection selection_ = Selection::Identity();
   Vec6 home_pose_ = Vec6::Zero();
@@ -126,7 +130,11 @@ class TauModel {
   Vec6 link_mass_ = Vec6::Zero();          // link point mass (gravity)
   Vec6 link_com_radius_ = Vec6::Zero();
   Vec6 rod_mass_ = Vec6::Zero();
+  Vec6 link_lever_ = Vec6::Zero();         // link mass x its radius + half rod mass x L1 (gravity)
   std::vector<PointMass> platform_masses_;  // platform, handle, rod halves
+  double body_mass_ = 0.0;                   // their sum,
+  Vec3 body_first_moment_ = Vec3::Zero();    // sum m c,
+  Mat3 body_second_moment_ = Mat3::Zero();   // sum m c c^T (platform frame)
   Vec3 gravity_ = Vec3(0.0, 0.0, -9.81);
   int encoder_counts_ = 4096;
   double servo_period_ = 1e-3;
