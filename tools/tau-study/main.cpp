@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <cstdio>
 #include <limits>
+#include <sstream>
 #include <string>
 #include <vector>
 
@@ -86,6 +87,12 @@ int main(int argc, char** argv) {
   int substeps = 0;
   cli.integer("--substeps", substeps,
               "plant integration substeps per servo period in the grid runs (default: the parameter file's)", 1, 1000);
+  double relinearize = GridOptions{}.relinearize_tolerance;
+  std::ostringstream relinearize_default;
+  relinearize_default << relinearize;
+  cli.number("--relinearize", relinearize,
+             "joint travel (rad) after which the grid runs' plant solves its dynamics and pose again (0: every "
+             "period; default " + relinearize_default.str() + ")", 0.0, 0.01);
   bool ideal_encoders = false;
   app.add_flag("--ideal-encoders", ideal_encoders, "ideal joint sensors instead of 4096-count encoders (all variants)");
   if (const int status = cli.parse(argc, argv); status >= 0) return status;
@@ -143,6 +150,7 @@ int main(int argc, char** argv) {
     grid_options.applied_torque_known = !applied_unknown;
     grid_options.delay_release_distance = delay_release;
     grid_options.substeps = substeps;
+    grid_options.relinearize_tolerance = relinearize;
     const std::size_t jobs = static_cast<std::size_t>(grid * grid) * static_cast<std::size_t>(runs);
     tools::Progress progress("tau-study", jobs);
     const auto t0 = std::chrono::steady_clock::now();

@@ -39,6 +39,7 @@ RunMetrics simulateRun(const TauModel& model, const LqrWallGains& gains, const R
   so.max_delay_samples = spec.max_delay_samples;
   so.quantize = spec.quantize;
   so.substeps = spec.substeps;
+  so.relinearize_tolerance = spec.relinearize_tolerance;
   so.seed = spec.seed ^ 0x9e3779b97f4a7c15ULL;
   so.tool_damping = spec.controller == Controller::kSpring ? params.device_damping : 0.0;
   so.tool_rotational_damping = spec.controller == Controller::kSpring ? params.device_rotational_damping : 0.0;
@@ -288,6 +289,7 @@ GridStudy runGrid(const TauModel& model, const LqrWallGains& gains, const LqrWal
       spec.lqr_release_distance = variants[v].delay > 0 ? options.delay_release_distance : -1.0;
       spec.applied_torque_known = options.applied_torque_known;
       spec.substeps = options.substeps;
+      spec.relinearize_tolerance = options.relinearize_tolerance;
       results[job * kNumVariants + v] = simulateRun(model, variants[v].delay > 0 ? delay_gains : gains, spec);
     }
     if (job_done) job_done();

@@ -46,6 +46,7 @@ void SimulatedTau::reset(const Vec6& q0) {
   hand_attached_ = false;
   hand_force_.setZero();
   time_ = 0.0;
+  linearized_ = false;
   quantize();
 }
 
@@ -65,6 +66,26 @@ void SimulatedTau::quantize() noexcept {
   for (int i = 0; i < 6; ++i) reading_(i) = std::floor(q_(i) / res) * res;
 }
 
+Fault SimulatedTau::linearize() noexcept {
+  // data_ holds the forward kinematics at q_ from reset()/the previous step.
+  const Fault f = model_.computeDynamicsTerms(q_, qd_, data_);
+  if (f != Fault::kNone) return f;
+  // The plant terms are frozen over the period, so the substeps only need M^-1 applied to the
+  // drive and to the force directions: factorize and solve once, then matrix-vector products.
+  mass_.compute(data_.M);
+  const Mat<3, 6> Jp = data_.J.topRows<3>();
+  const Mat<3, 6> Jr = data_.J.bottomRows<3>();
+  force_to_qdd_ = mass_.solve(Jp.transpose());
+  // Rotational damping: a generalized force -b Jr^T (Euler-angle rates), dissipative by construction.
+  rotational_damping_ = -options_.tool_rotational_damping * mass_.solve(Jr.transpose()) * Jr;
+  // The angular stops' torques on the orientation (Euler angles) act through Jr^T.
+  if (options_.end_stops) torque_to_qdd_ = mass_.solve(Jr.transpose());
+  q_lin_ = q_;
+  pose_lin_ = data_.pose;
+  linearized_ = true;
+  return Fault::kNone;
+}
+
 Fault SimulatedTau::step(const Vec6& tau_command, const Vec3& external_force) noexcept {
   // Transport delay: the plant applies the command issued d samples ago, d ~ U{0..max}.
   const Vec6 command = tau_command.allFinite() ? tau_command : Vec6::Zero();
@@ -81,23 +102,18 @@ Fault SimulatedTau::step(const Vec6& tau_command, const Vec3& external_force) no
   applied_ = command_history_[(history_head_ + command_history_.size() - delay) % command_history_.size()];
   clampSymmetric(applied_, model_.effortLimits());  // motor saturation
 
-  // data_ holds the forward kinematics at q_ from reset()/the previous step.
-  Fault f = model_.computeDynamicsTerms(q_, qd_, data_);
-  if (f != Fault::kNone) return f;
-  // The plant terms are frozen over the period, so the substeps only need M^-1 applied to the
-  // drive and to the force directions: factorize and solve once, then matrix-vector products.
-  const Eigen::LLT<Mat6> mass(data_.M);
+  if (!linearized_ || (q_ - q_lin_).cwiseAbs().maxCoeff() > options_.relinearize_tolerance) {
+    const Fault f = linearize();
+    if (f != Fault::kNone) return f;
+  }
   const Mat<3, 6> Jp = data_.J.topRows<3>();
   const Mat<3, 6> Jr = data_.J.bottomRows<3>();
   const Vec3 p0 = data_.pose.head<3>();
   const Vec6 q0 = q_;
-  const Vec6 qdd_drive = mass.solve(applied_ - data_.bias - data_.gravity);
-  const Mat<6, 3> force_to_qdd = mass.solve(Jp.transpose());
-  // Rotational damping: a generalized force -b Jr^T (Euler-angle rates), dissipative by construction.
-  const Mat6 rotational_damping = -options_.tool_rotational_damping * mass.solve(Jr.transpose()) * Jr;
-  // The angular stops' torques on the orientation (Euler angles) act through Jr^T.
-  Mat<6, 3> torque_to_qdd = Mat<6, 3>::Zero();
-  if (options_.end_stops) torque_to_qdd = mass.solve(Jr.transpose());
+  const Vec6 qdd_drive = mass_.solve(applied_ - data_.bias - data_.gravity);
+  const Mat<6, 3>& force_to_qdd = force_to_qdd_;
+  const Mat6& rotational_damping = rotational_damping_;
+  const Mat<6, 3>& torque_to_qdd = torque_to_qdd_;
   const TauModel::EndStops& stops = model_.endStops();
   const Vec3 centre = model_.homePose().head<3>();
   const Vec3 a0 = data_.pose.tail<3>() - model_.homePose().tail<3>();
@@ -132,11 +148,34 @@ Fault SimulatedTau::step(const Vec6& tau_command, const Vec3& external_force) no
     hand_v_ += hand_a_ * T;
   }
   time_ += T;
+  const Vec6 pose_before = data_.pose;
+  if (options_.relinearize_tolerance > 0.0 && (q - q_lin_).cwiseAbs().maxCoeff() <= options_.relinearize_tolerance) {
+    // Within the held linearization the pose is still solved to the forward kinematics' tolerance:
+    // Newton's method on the closure with dg/dX's factorization held from q_lin_, from the
+    // first-order prediction (each step gains the digits that dg/dX's relative change over the
+    // travel, ~1e-4, leaves: one or two steps). What does not converge takes the full solve below.
+    Vec6 pose = pose_lin_, g;
+    pose.noalias() += data_.J * (q - q_lin_);
+    bool converged = false;
+    for (int it = 0;; ++it) {
+      model_.kinematics().closure(pose, q, g);
+      converged = g.cwiseAbs().maxCoeff() <= model_.fkTolerance();  // false for NaN
+      if (converged || it == 3) break;
+      pose.noalias() -= data_.lu.solve(g);
+    }
+    if (converged) {
+      data_.pose = pose;
+      q_ = q;
+      qd_ = qd;
+      quantize();
+      return Fault::kNone;
+    }
+  }
   // Keep pose/J current for observers, Newton warm-started from the first-order prediction
   // X + J dq (usually one iteration).
-  const Vec6 pose_before = data_.pose;
+  linearized_ = false;
   data_.pose.noalias() += data_.J * (q - q0);
-  f = model_.forward(q, data_);
+  const Fault f = model_.forward(q, data_);
   if (f != Fault::kNone) {
     // No assembly at q: the mechanism cannot get there. It stops where it was; pose() and J are
     // solved again at q_ (forward() used them as scratch), from the solution they had.

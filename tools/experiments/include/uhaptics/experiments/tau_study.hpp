@@ -37,6 +37,10 @@ struct RunSpec {
   // the pose for as long as the environment reports the contact.
   double lqr_release_distance = -1.0;
   int substeps = 0;  // plant integration substeps per servo period; 0: the model's (tau.json)
+  // SimulatedTauOptions::relinearize_tolerance (rad). 1e-4, a fifteenth of an encoder count: the
+  // reproduction rows move by at most 0.1 % (spring) and within their run-to-run noise (LQR), at
+  // three quarters of the run time of solving every period (docs/tau.md).
+  double relinearize_tolerance = 1e-4;
 };
 
 struct StudyParameters {
@@ -131,6 +135,7 @@ struct GridOptions {
   bool applied_torque_known = true;  // RunSpec::applied_torque_known, all variants
   double delay_release_distance = -1.0;  // RunSpec::lqr_release_distance of the delay variants
   int substeps = 0;                      // RunSpec::substeps, all variants
+  double relinearize_tolerance = RunSpec{}.relinearize_tolerance;  // all variants
 };
 
 struct Statistics {

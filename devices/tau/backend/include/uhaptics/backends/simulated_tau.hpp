@@ -12,6 +12,7 @@
 // result far less than the encoder quantization (tests/tau/simulated_tau_test.cpp: < 0.1 % of the
 // penetration against a 4x finer refresh; halving the substep changes it by < 2 %).
 #include <cstdint>
+#include <Eigen/Cholesky>
 #include <random>
 #include <vector>
 
@@ -35,6 +36,10 @@ struct SimulatedTauOptions {
   // The device's mechanical stops (TauModel::endStops()). Off for paper 001's study, whose runs stay
   // in the workspace; on where the device may go unpowered (a board plant, a fault).
   bool end_stops = false;
+  // The plant's lumped dynamics (M, gravity, velocity term, J) and pose are solved again when any
+  // joint has moved more than this (rad) since they last were; within it, they are held and the pose
+  // follows J to first order (error ~ curvature x tolerance^2). 0: solved every period.
+  double relinearize_tolerance = 0.0;
   std::uint64_t seed = 1;         // delay draws
   HandModel hand;
 };
@@ -69,6 +74,7 @@ class SimulatedTau {
 
  private:
   void quantize() noexcept;
+  Fault linearize() noexcept;
   const TauModel& model_;
   SimulatedTauOptions options_;
   TauData data_;
@@ -80,6 +86,13 @@ class SimulatedTau {
   bool hand_attached_ = false;
   Vec3 hand_p_ = Vec3::Zero(), hand_v_ = Vec3::Zero(), hand_a_ = Vec3::Zero(), hand_force_ = Vec3::Zero();
   double time_ = 0.0;
+  // The period's dynamics, solved at q_lin_ (pose pose_lin_) and held while the joints stay within
+  // relinearize_tolerance of it: M's factorization and M^-1 applied to the force directions.
+  bool linearized_ = false;
+  Vec6 q_lin_ = Vec6::Zero(), pose_lin_ = Vec6::Zero();
+  Eigen::LLT<Mat6> mass_;
+  Mat<6, 3> force_to_qdd_ = Mat<6, 3>::Zero(), torque_to_qdd_ = Mat<6, 3>::Zero();
+  Mat6 rotational_damping_ = Mat6::Zero();
 };
 
 }  // namespace uhaptics
