@@ -77,6 +77,41 @@ TEST_CASE("TAU statics: a 15 N + 3 sigma push anywhere on the wall needs well un
   CHECK(worst < 0.5);
 }
 
+TEST_CASE("TAU kinematics: the branch test by the signs of dg/dq agrees with the inverse's round trip") {
+  // Every leg flipped to its other branch in turn, at poses over the workspace: the sign test
+  // (RusLegKinematics) and the round trip through inverse() (TauKinematics' default) must agree on
+  // every closure solution, the own branches and each flipped one.
+  const TauModel& m = model();
+  const auto& kin = dynamic_cast<const RusLegKinematics&>(m.kinematics());
+  std::array<RusLegKinematics::Leg, 6> legs;
+  for (int i = 0; i < 6; ++i) legs[i] = kin.leg(i);
+  for (double x : {-0.02, 0.0, 0.02})
+    for (double y : {-0.02, 0.02})
+      for (double a : {-0.1, 0.0, 0.1}) {
+        Vec6 pose = m.homePose();
+        pose(0) += x;
+        pose(1) += y;
+        pose(2) += 0.5 * y;
+        pose(3) += a;
+        pose(4) -= 0.5 * a;
+        pose(5) += 0.3 * a;
+        for (int flip = -1; flip < 6; ++flip) {
+          std::array<RusLegKinematics::Leg, 6> flipped = legs;
+          if (flip >= 0) flipped[flip].branch = -flipped[flip].branch;
+          Vec6 q;
+          REQUIRE(RusLegKinematics(flipped).inverse(pose, q) == Fault::kNone);
+          Vec6 g;
+          Mat6 dg_dpose, dg_dq;
+          kin.constraints(pose, q, g, dg_dpose, dg_dq);
+          REQUIRE(g.cwiseAbs().maxCoeff() < 1e-12);  // a closure solution
+          const bool by_signs = kin.onAssembledBranches(pose, q, dg_dq, 1e-9);
+          const bool by_round_trip = kin.TauKinematics::onAssembledBranches(pose, q, dg_dq, 1e-9);
+          CHECK(by_signs == by_round_trip);
+          CHECK(by_signs == (flip < 0));
+        }
+      }
+}
+
 TEST_CASE("TAU Jacobian matches finite differences of the forward kinematics") {
   const TauModel& m = model();
   Vec6 pose;
@@ -145,10 +180,10 @@ TEST_CASE("TAU dynamics: symmetric positive mass matrix, gravity = gradient of p
 
 TEST_CASE("TAU dynamics: velocity term = mass-weighted velocity-product accelerations of the platform points") {
   // Reference: each platform point's acceleration along q(t) = q + t qd (qdd = 0), a five-point
-  // second difference of its position on forward kinematics solved to 1e-12 m. With h = 1e-2 s at
-  // |qd| ~ 1 rad/s: truncation h^4 x^(6) / 90 ~ 1e-11 m/s^2, rounding ~1e-12 m / h^2 ~ 1e-8 m/s^2.
-  // The model's second difference of the closure over a 1 mrad joint step (its truncation) agrees
-  // to 5.7e-7 at both speeds (the step is 1 mrad at either), so 2e-6 leaves a factor 3.5.
+  // second difference of its position on forward kinematics solved to 1e-12 m, over joint steps of
+  // 5 mrad at either speed (h = 5e-3 s / scale): truncation ~h^4, rounding ~1e-12 m / h^2. The
+  // model's closed form agrees to 2.3e-8 at both speeds; with 10 mrad steps, to 3.7e-7 (16 times
+  // more: the reference's h^4 truncation is what is measured). 2e-7 leaves a factor 9.
   const TauModel& m = model();
   Vec6 pose;
   pose << -0.015, 0.01, -0.01, 0.05, 0.08, -0.1;
@@ -161,7 +196,7 @@ TEST_CASE("TAU dynamics: velocity term = mass-weighted velocity-product accelera
     TauData d(m);
     REQUIRE(m.forward(q, d) == Fault::kNone);
     REQUIRE(m.computeDynamicsTerms(q, v, d) == Fault::kNone);
-    const double h = 1e-2 / scale;
+    const double h = 5e-3 / scale;
     Vec6 expected = Vec6::Zero();
     for (const auto& pm : m.platformMasses()) {
       auto point = [&](double t) {
@@ -174,8 +209,39 @@ TEST_CASE("TAU dynamics: velocity term = mass-weighted velocity-product accelera
       expected += pm.mass * (PoseRotation(d.pose).pointJacobian(pm.body_point) * d.J).transpose() * accel;
     }
     CAPTURE(scale, d.bias.transpose(), expected.transpose());
-    CHECK((d.bias - expected).norm() < 2e-6 * expected.norm());
+    CHECK((d.bias - expected).norm() < 2e-7 * expected.norm());
   }
+}
+
+TEST_CASE("TAU kinematics: the closure's acceleration in closed form = its second difference along the motion") {
+  // Along the line (X + t X', q + t q') (X'' = 0, q'' = 0), a five-point second difference of
+  // closure() over 1 mrad joint steps: truncation ~h^4 g^(6) ~ 1e-12 of g'', rounding 1e-16 m /
+  // h^2. TauKinematics' own default (a three-point difference, truncation ~1e-6 relative) is the
+  // same quantity for any geometry; both against the closed form of RusLegKinematics.
+  const TauModel& m = model();
+  const TauKinematics& kin = m.kinematics();
+  Vec6 pose;
+  pose << -0.015, 0.01, -0.01, 0.05, 0.08, -0.1;
+  Vec6 q;
+  REQUIRE(m.inverse(pose, q) == Fault::kNone);
+  Vec6 qd;
+  qd << 0.7, -1.1, 0.4, 0.9, -0.3, 1.2;
+  TauData d(m);
+  REQUIRE(m.forward(q, d) == Fault::kNone);
+  const Vec6 Xd = d.J * qd;
+  Vec6 exact, default_difference;
+  kin.closureAcceleration(d.pose, q, Xd, qd, exact);
+  kin.TauKinematics::closureAcceleration(d.pose, q, Xd, qd, default_difference);
+  const double h = 1e-3 / qd.cwiseAbs().maxCoeff();
+  auto g = [&](double t) {
+    Vec6 r;
+    kin.closure(d.pose + t * Xd, q + t * qd, r);
+    return r;
+  };
+  const Vec6 five_point = (-g(2 * h) + 16.0 * g(h) - 30.0 * g(0) + 16.0 * g(-h) - g(-2 * h)) / (12.0 * h * h);
+  CAPTURE(exact.transpose(), five_point.transpose(), default_difference.transpose());
+  CHECK((exact - five_point).norm() < 1e-8 * exact.norm());
+  CHECK((exact - default_difference).norm() < 1e-5 * exact.norm());
 }
 
 TEST_CASE("TAU parameter file errors are reported with the key") {

@@ -20,10 +20,11 @@ Mat3 PoseRotation::rotation(const Vec6& pose) noexcept {
   return R;
 }
 
-PoseRotation::PoseRotation(const Vec6& pose) noexcept : R(rotation(pose)) {
+PoseRotation::PoseRotation(const Vec6& pose) noexcept
+    : R(rotation(pose)), cos_gamma(std::cos(pose(5))), sin_gamma(std::sin(pose(5))) {
   // Each angle turns about its own axis in the product Rz Ry Rx: dRx/dalpha = Rx [e_x]x, so
   // dR/dalpha = R [e_x]x; dR/dgamma = [e_z]x R; dR/dbeta = Rz Ry [e_y]x Rx = [Rz e_y]x R.
-  const double cg = std::cos(pose(5)), sg = std::sin(pose(5));
+  const double cg = cos_gamma, sg = sin_gamma;
   dR[0].col(0).setZero();
   dR[0].col(1) = R.col(2);
   dR[0].col(2) = -R.col(1);
@@ -33,6 +34,21 @@ PoseRotation::PoseRotation(const Vec6& pose) noexcept : R(rotation(pose)) {
   dR[2].row(0) = -R.row(1);
   dR[2].row(1) = R.row(0);
   dR[2].row(2).setZero();
+}
+
+Mat3 PoseRotation::acceleration(const Vec3& rates) const noexcept {
+  // R' = a' R [e_x]x + b' [w]x R + g' [e_z]x R with w = Rz e_y (dR above); differentiated again
+  // with constant rates: R'' = a' R' [e_x]x + b' ([w']x R + [w]x R') + g' [e_z]x R', w' = g' dw/dgamma.
+  const auto skew = [](const Vec3& v) {
+    Mat3 m;
+    m << 0.0, -v.z(), v.y(), v.z(), 0.0, -v.x(), -v.y(), v.x(), 0.0;
+    return m;
+  };
+  const Mat3 Ex = skew(Vec3::UnitX()), Ez = skew(Vec3::UnitZ());
+  const Mat3 W = skew(Vec3(-sin_gamma, cos_gamma, 0.0));
+  const Mat3 Wd = skew(rates.z() * Vec3(-cos_gamma, -sin_gamma, 0.0));
+  const Mat3 Rd = rates.x() * dR[0] + rates.y() * dR[1] + rates.z() * dR[2];
+  return rates.x() * Rd * Ex + rates.y() * (Wd * R + W * Rd) + rates.z() * Ez * Rd;
 }
 
 Mat<3, 6> PoseRotation::pointJacobian(const Vec3& c) const noexcept {
@@ -125,6 +141,52 @@ void RusLegKinematics::closure(const Vec6& pose, const Vec6& q, Vec6& g) const n
     const Vec3 d = p + R * l.platform_point - (l.base + l.link_length * (c * l.zero_direction + s * l.lift_direction));
     g(i) = 0.5 * (d.squaredNorm() - l.rod_length * l.rod_length) / l.rod_length;
   }
+}
+
+bool RusLegKinematics::onAssembledBranches(const Vec6&, const Vec6&, const Mat6& dg_dq, double) const noexcept {
+  // For a fixed pose, leg i's closure is a sinusoid in q_i: with D = platform point - base,
+  // A = D.u, B = D.w, rho = hypot(A, B), phi = atan2(B, A), g_i = (|D|^2 + L1^2 - L2^2 - 2 L1 rho
+  // cos(q_i - phi)) / (2 L2). Its two zeros are inverse()'s two branches, q_i - phi = +-acos(C/rho),
+  // and there dg_i/dq_i = (L1/L2) rho sin(q_i - phi) has the sign of the branch. So the round trip
+  // through inverse() reduces to a sign per leg (zero: the two branches meet, a singular leg).
+  for (int i = 0; i < 6; ++i)
+    if (!(dg_dq(i, i) * legs_[i].branch > 0.0)) return false;
+  return true;
+}
+
+void RusLegKinematics::closureAcceleration(const Vec6& pose, const Vec6& q, const Vec6& pose_rate, const Vec6& q_rate,
+                                           Vec6& g_dd) const noexcept {
+  const PoseRotation rot(pose);
+  const Mat3 Rd = pose_rate(3) * rot.dR[0] + pose_rate(4) * rot.dR[1] + pose_rate(5) * rot.dR[2];
+  const Mat3 Rdd = rot.acceleration(pose_rate.tail<3>());
+  for (int i = 0; i < 6; ++i) {
+    const Leg& l = legs_[i];
+    const double c = std::cos(q(i)), s = std::sin(q(i));
+    const Vec3 radial = l.link_length * (c * l.zero_direction + s * l.lift_direction);
+    const Vec3 tangential = l.link_length * (-s * l.zero_direction + c * l.lift_direction);
+    // d = p + R c_i - tip(q_i); with p'' = 0, angle'' = 0, q'' = 0: tip'' = -radial q'^2.
+    const Vec3 d = pose.head<3>() + rot.R * l.platform_point - l.base - radial;
+    const Vec3 d_rate = pose_rate.head<3>() + Rd * l.platform_point - tangential * q_rate(i);
+    const Vec3 d_acc = Rdd * l.platform_point + radial * (q_rate(i) * q_rate(i));
+    g_dd(i) = (d_rate.squaredNorm() + d.dot(d_acc)) / l.rod_length;
+  }
+}
+
+void TauKinematics::closureAcceleration(const Vec6& pose, const Vec6& q, const Vec6& pose_rate, const Vec6& q_rate,
+                                        Vec6& g_dd) const noexcept {
+  // g vanishes along the motion to first order, so the difference loses no digits: truncation
+  // O(h^2), rounding ~1e-17 m / h^2.
+  const double speed = q_rate.cwiseAbs().maxCoeff();
+  if (!(speed > 0.0)) {
+    g_dd.setZero();
+    return;
+  }
+  const double h = 1e-3 / speed;
+  Vec6 g_plus, g_zero, g_minus;
+  closure(pose + h * pose_rate, q + h * q_rate, g_plus);
+  closure(pose, q, g_zero);
+  closure(pose - h * pose_rate, q - h * q_rate, g_minus);
+  g_dd = (g_plus - 2.0 * g_zero + g_minus) / (h * h);
 }
 
 void RusLegKinematics::linkPoint(int joint, double qj, double radius, Vec3& point, Vec3& dpoint) const noexcept {

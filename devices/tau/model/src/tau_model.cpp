@@ -119,22 +119,20 @@ Fault TauModel::forward(const Vec6& q, TauData& data) const noexcept {
   double residual = 0.0;
   int iterations = 0;
   // The closure equations have several solutions (assembly modes); Newton from a far warm start can
-  // land on another one. The device's own is the one the closed-form inverse maps back to q.
+  // land on another one. The device's own has its det(dg/dX) sign and its chains' branches.
   auto solveOwnMode = [&]() {
     Fault r = solvePose(*kinematics_, q, fk_tolerance_, fk_max_iterations_, X, data, residual, iterations);
     if (r == Fault::kNone) {
       // Modes are separated by the singularities of dg/dX, so the device's own keeps the sign of
-      // det(dg/dX) it has at home; the inverse's leg branches must also map the pose back to q.
-      // The round trip is as exact as the pose: Newton stops at a closure residual <= fk_tolerance_
+      // det(dg/dX) it has at home; and every chain must be on its assembled branch
+      // (TauKinematics::onAssembledBranches). Where that is checked by mapping the pose back through
+      // the inverse, the round trip is as exact as the pose: Newton stops at a closure residual <= fk_tolerance_
       // (m), which moves the joints by ~residual / lever (~0.1 m); 1e3 rad/m covers that with margin
       // and stays far below the distance between assembly modes (tenths of a radian). A fixed
       // 1e-9 rad refused every pose for tolerances above ~1e-8 m (tools/bench/numerics_bench.cpp).
       const double round_trip = std::max(1e-9, 1e3 * fk_tolerance_);
-      Vec6 q_back;
       const bool other_mode = assembly_mode_sign_ != 0.0 && data.lu.determinant() * assembly_mode_sign_ <= 0.0;
-      if (other_mode || kinematics_->inverse(X, q_back) != Fault::kNone ||
-          !((q_back - q).cwiseAbs().maxCoeff() <= round_trip))
-        r = Fault::kOutOfRange;
+      if (other_mode || !kinematics_->onAssembledBranches(X, q, data.dg_dq, round_trip)) r = Fault::kOutOfRange;
     }
     return r;
   };
@@ -210,21 +208,16 @@ Fault TauModel::computeDynamicsTerms(const Vec6& q, const Vec6& qd, TauData& dat
   if (!std::isfinite(speed)) return Fault::kNonFiniteInput;
   if (speed < 1e-12) return Fault::kNone;
   // Velocity-product acceleration (qdd = 0) of every platform point. Differentiating the closure
-  // g(X(t), q(t)) = 0 twice gives dg/dX X'' = -D2g[v, v] along v = (X', q') = (J qd, qd); D2g[v, v]
-  // is a central second difference of g along the line through (X, q) in direction v. g vanishes
-  // there to first order (v is tangent to the closure), so the difference loses no digits:
-  // truncation O(h^2), rounding ~1e-17 m / h^2. dg/dX is factorized in data.lu by forward().
-  const double h = 1e-3 / speed;  // joint step of at most 1 mrad
+  // g(X(t), q(t)) = 0 twice gives dg/dX X'' = -g''|_{X''=0, q''=0} along (X', q') = (J qd, qd);
+  // dg/dX is factorized in data.lu by forward().
   const Vec6 Xd = data.J * qd;
-  Vec6 g_plus, g_minus;
-  kinematics_->closure(data.pose + h * Xd, q + h * qd, g_plus);
-  kinematics_->closure(data.pose - h * Xd, q - h * qd, g_minus);
-  const double inv_h2 = 1.0 / (h * h);
-  const Vec6 Xdd = -data.lu.solve((g_plus - 2.0 * data.g + g_minus) * inv_h2);
+  Vec6 g_dd;
+  kinematics_->closureAcceleration(data.pose, q, Xd, qd, g_dd);
+  const Vec6 Xdd = -data.lu.solve(g_dd);
   if (!Xdd.allFinite()) return Fault::kNonFiniteResult;
-  // A point x = p + R(angles) c: x'' = S_c X'' + D c, D the second difference of R along the angle
-  // rates. Summed over the masses, sum m S_c^T x'' = M_X X'' + [D mu; tr(dR_k^T D C)].
-  const Mat3 D = (PoseRotation::rotation(data.pose + h * Xd) - 2.0 * rot.R + PoseRotation::rotation(data.pose - h * Xd)) * inv_h2;
+  // A point x = p + R(angles) c: x'' = S_c X'' + D c, D = R'' at the angle rates. Summed over the
+  // masses, sum m S_c^T x'' = M_X X'' + [D mu; tr(dR_k^T D C)].
+  const Mat3 D = rot.acceleration(Xd.tail<3>());
   const Mat3 DC = D * body_second_moment_;
   Vec6 body_force = MX * Xdd;
   body_force.head<3>() += D * body_first_moment_;
