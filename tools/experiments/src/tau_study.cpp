@@ -91,6 +91,8 @@ RunMetrics simulateRun(const TauModel& model, const LqrWallGains& gains, const R
     // The quantized reading often repeats (a held tool); forward() from the previous solution would
     // return the same pose and fault.
     if (k == 0 || q_meas != fk_q) {
+      // Newton from the first-order prediction, as the renderers' own front end starts it.
+      if (k > 0 && fk == Fault::kNone) device.pose.noalias() += device.J * (q_meas - fk_q);
       fk = model.forward(q_meas, device);
       fk_q = q_meas;
     }

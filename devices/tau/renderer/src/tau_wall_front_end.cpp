@@ -42,6 +42,7 @@ Fault TauServoFrontEnd::update(const Vec6& q, const SurfaceContact& contact, con
 
 Fault TauServoFrontEnd::update(const Vec6& q, const SurfaceContact& contact, const Vec6* pose) noexcept {
   bool same_q = false;
+  const Vec6 q_solved = q_;  // where data_ was solved, if data_current_
   if (!acceptInputs(q, contact, same_q)) {
     data_current_ = false;
     return Fault::kNonFiniteInput;
@@ -55,6 +56,10 @@ Fault TauServoFrontEnd::update(const Vec6& q, const SurfaceContact& contact, con
     data_.pose = *pose;
   } else if (same_q && data_current_) {
     return Fault::kNone;  // Newton would start at the solution for q and stop there
+  } else if (data_current_) {
+    // Newton from the first-order prediction X + J dq: one iteration where the last solution would
+    // take two or three after an encoder count's step.
+    data_.pose.noalias() += data_.J * (q - q_solved);
   }
   // With a caller-supplied pose Newton starts at the solution and only evaluates J (0 iterations).
   data_current_ = false;
