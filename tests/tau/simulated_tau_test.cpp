@@ -127,25 +127,24 @@ TEST_CASE("Simulated TAU: refreshing the plant once per servo period is converge
   }
 }
 
-TEST_CASE("Simulated TAU: holding the plant's linearization within 1e-4 rad changes the trajectory by < 0.1 %") {
-  // Within relinearize_tolerance of where they were solved, M, gravity, the velocity term, J and
-  // dg/dX's factorization are held (they change by ~1e-4 of themselves over that travel); the pose
-  // is solved from the first-order prediction by Newton steps with the held factorization. Against
-  // solving every period, the tool's height must agree to 0.1 % of the penetration (measured: LQR
-  // 0.016 %), and the pose must close the loop to the forward kinematics' tolerance.
+TEST_CASE("Simulated TAU: holding the plant's linearization within 1e-3 rad changes the trajectory by < 0.1 %") {
+  // Within relinearize_tolerance of where they were solved (the study's 1e-3 rad here), M, gravity,
+  // the velocity term, J and dg/dX's factorization are held (they change by ~1e-3 of themselves
+  // over that travel); the pose is solved from the first-order prediction by Newton steps with the
+  // held factorization. Against solving every period, the tool's height must agree to 0.1 % of the
+  // penetration (measured: spring 0.002 %, LQR 0.05 %), and the pose must close the loop to the
+  // forward kinematics' tolerance.
   for (Wall wall : {Wall::kSpring, Wall::kLqr}) {
     const auto every = trajectory(wall, model(), 10, 1);
     double closure = 0.0;
-    const auto held = trajectory(wall, model(), 10, 1, 1e-4, &closure);
+    const auto held = trajectory(wall, model(), 10, 1, 1e-3, &closure);
     const double peak = maxAbs(every);
     INFO((wall == Wall::kLqr ? "LQR" : "spring") << " wall: peak penetration " << peak * 1e3 << " mm, difference "
                                                  << maxDifference(every, held) << " m, closure residual up to "
                                                  << closure << " m");
     CHECK(maxDifference(every, held) < 0.001 * peak);
     CHECK(closure <= model().fkTolerance());
-    // The LQR wall holds the tool within the tolerance for whole periods, so some were held there;
-    // the spring wall's 20 Hz oscillation moves it further every period of this run.
-    if (wall == Wall::kLqr) CHECK(maxDifference(every, held) > 0.0);
+    CHECK(maxDifference(every, held) > 0.0);  // some periods were held
   }
 }
 
