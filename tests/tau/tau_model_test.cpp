@@ -13,6 +13,21 @@ using namespace uhaptics;
 
 namespace {
 const TauModel& model() { return test::tauModel(); }
+
+// The dynamics tests' state: the joints of an off-centre pose (every coordinate moved) and a joint
+// velocity with every joint moving.
+Vec6 offCentreJoints() {
+  Vec6 pose;
+  pose << -0.015, 0.01, -0.01, 0.05, 0.08, -0.1;
+  Vec6 q;
+  REQUIRE(model().inverse(pose, q) == Fault::kNone);
+  return q;
+}
+Vec6 jointVelocity() {
+  Vec6 qd;
+  qd << 0.7, -1.1, 0.4, 0.9, -0.3, 1.2;
+  return qd;
+}
 }  // namespace
 
 TEST_CASE("TAU model satisfies the kinematic-model interface") { STATIC_REQUIRE(kIsKinematicModel<TauModel>); }
@@ -133,10 +148,7 @@ TEST_CASE("TAU Jacobian matches finite differences of the forward kinematics") {
 
 TEST_CASE("TAU dynamics: symmetric positive mass matrix, gravity = gradient of potential energy") {
   const TauModel& m = model();
-  Vec6 pose;
-  pose << -0.015, 0.01, -0.01, 0.05, 0.08, -0.1;
-  Vec6 q;
-  REQUIRE(m.inverse(pose, q) == Fault::kNone);
+  const Vec6 q = offCentreJoints();
   TauData d(m);
   REQUIRE(m.forward(q, d) == Fault::kNone);
   REQUIRE(m.computeDynamicsTerms(q, Vec6::Zero(), d) == Fault::kNone);
@@ -185,12 +197,8 @@ TEST_CASE("TAU dynamics: velocity term = mass-weighted velocity-product accelera
   // model's closed form agrees to 2.3e-8 at both speeds; with 10 mrad steps, to 3.7e-7 (16 times
   // more: the reference's h^4 truncation is what is measured). 2e-7 leaves a factor 9.
   const TauModel& m = model();
-  Vec6 pose;
-  pose << -0.015, 0.01, -0.01, 0.05, 0.08, -0.1;
-  Vec6 q;
-  REQUIRE(m.inverse(pose, q) == Fault::kNone);
-  Vec6 qd;
-  qd << 0.7, -1.1, 0.4, 0.9, -0.3, 1.2;
+  const Vec6 q = offCentreJoints();
+  const Vec6 qd = jointVelocity();
   for (const double scale : {1.0, 5.0}) {
     const Vec6 v = scale * qd;
     TauData d(m);
@@ -220,12 +228,8 @@ TEST_CASE("TAU kinematics: the closure's acceleration in closed form = its secon
   // same quantity for any geometry; both against the closed form of RusLegKinematics.
   const TauModel& m = model();
   const TauKinematics& kin = m.kinematics();
-  Vec6 pose;
-  pose << -0.015, 0.01, -0.01, 0.05, 0.08, -0.1;
-  Vec6 q;
-  REQUIRE(m.inverse(pose, q) == Fault::kNone);
-  Vec6 qd;
-  qd << 0.7, -1.1, 0.4, 0.9, -0.3, 1.2;
+  const Vec6 q = offCentreJoints();
+  const Vec6 qd = jointVelocity();
   TauData d(m);
   REQUIRE(m.forward(q, d) == Fault::kNone);
   const Vec6 Xd = d.J * qd;
