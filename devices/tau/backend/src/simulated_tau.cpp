@@ -152,8 +152,8 @@ Fault SimulatedTau::step(const Vec6& tau_command, const Vec3& external_force) no
   if (options_.relinearize_tolerance > 0.0 && (q - q_lin_).cwiseAbs().maxCoeff() <= options_.relinearize_tolerance) {
     // Within the held linearization the pose is still solved to the forward kinematics' tolerance:
     // Newton's method on the closure with dg/dX's factorization held from q_lin_, from the
-    // first-order prediction (each step gains the digits that dg/dX's relative change over the
-    // travel, ~1e-4, leaves: one or two steps). What does not converge takes the full solve below.
+    // first-order prediction (each step shrinks the error by dg/dX's relative change over the
+    // travel, about the tolerance: one or two steps). What does not converge takes the full solve.
     Vec6 pose = pose_lin_, g;
     pose.noalias() += data_.J * (q - q_lin_);
     bool converged = false;

@@ -36,9 +36,10 @@ struct SimulatedTauOptions {
   // The device's mechanical stops (TauModel::endStops()). Off for paper 001's study, whose runs stay
   // in the workspace; on where the device may go unpowered (a board plant, a fault).
   bool end_stops = false;
-  // The plant's lumped dynamics (M, gravity, velocity term, J) and pose are solved again when any
-  // joint has moved more than this (rad) since they last were; within it, they are held and the pose
-  // follows J to first order (error ~ curvature x tolerance^2). 0: solved every period.
+  // The plant's lumped dynamics (M, gravity, velocity term), J and dg/dX's factorization are solved
+  // again when any joint has moved more than this (rad) since they last were; within it they are
+  // held (they change by about the tolerance, relatively), and the pose is still solved to the
+  // forward kinematics' tolerance with the held factorization. 0: solved every period.
   double relinearize_tolerance = 0.0;
   std::uint64_t seed = 1;         // delay draws
   HandModel hand;

@@ -76,7 +76,7 @@ class TauModel {
   const Selection& selection() const noexcept { return selection_; }
 
   // --- dynamics (all need a successful forward(q, data) first) ------------------------------
-  // They use its pose, J, closure residual data.g and factorization data.lu, and leave them as they are.
+  // They use its pose, J and the factorization data.lu, and leave them as they are.
   /// Mass matrix, gravity torque and (if qd != 0) velocity term into data.M, data.gravity, data.bias.
   Fault computeDynamicsTerms(const Vec6& q, const Vec6& qd, TauData& data) const noexcept;
   /// Gravity torque only (what a gravity-compensating controller needs), into data.gravity.
