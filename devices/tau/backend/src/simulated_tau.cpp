@@ -111,9 +111,6 @@ Fault SimulatedTau::step(const Vec6& tau_command, const Vec3& external_force) no
   const Vec3 p0 = data_.pose.head<3>();
   const Vec6 q0 = q_;
   const Vec6 qdd_drive = mass_.solve(applied_ - data_.bias - data_.gravity);
-  const Mat<6, 3>& force_to_qdd = force_to_qdd_;
-  const Mat6& rotational_damping = rotational_damping_;
-  const Mat<6, 3>& torque_to_qdd = torque_to_qdd_;
   const TauModel::EndStops& stops = model_.endStops();
   const Vec3 centre = model_.homePose().head<3>();
   const Vec3 a0 = data_.pose.tail<3>() - model_.homePose().tail<3>();
@@ -134,9 +131,9 @@ Fault SimulatedTau::step(const Vec6& tau_command, const Vec3& external_force) no
       force += fh;
     }
     if (options_.end_stops) force += stopForce(p - centre, v, stops.half_side, stops.stiffness, stops.damping);
-    Vec6 qdd = qdd_drive + force_to_qdd * force + rotational_damping * qd;
+    Vec6 qdd = qdd_drive + force_to_qdd_ * force + rotational_damping_ * qd;
     if (options_.end_stops)
-      qdd.noalias() += torque_to_qdd * stopForce(a0 + Jr * (q - q0), Jr * qd, stops.half_angle,
+      qdd.noalias() += torque_to_qdd_ * stopForce(a0 + Jr * (q - q0), Jr * qd, stops.half_angle,
                                                  stops.angular_stiffness, stops.angular_damping);
     qd += dt * qdd;  // semi-implicit Euler: velocity first
     q += dt * qd;
@@ -148,7 +145,6 @@ Fault SimulatedTau::step(const Vec6& tau_command, const Vec3& external_force) no
     hand_v_ += hand_a_ * T;
   }
   time_ += T;
-  const Vec6 pose_before = data_.pose;
   if (options_.relinearize_tolerance > 0.0 && (q - q_lin_).cwiseAbs().maxCoeff() <= options_.relinearize_tolerance) {
     // Within the held linearization the pose is still solved to the forward kinematics' tolerance:
     // Newton's method on the closure with dg/dX's factorization held from q_lin_, from the
@@ -174,6 +170,7 @@ Fault SimulatedTau::step(const Vec6& tau_command, const Vec3& external_force) no
   // Keep pose/J current for observers, Newton warm-started from the first-order prediction
   // X + J dq (usually one iteration).
   linearized_ = false;
+  const Vec6 pose_before = data_.pose;
   data_.pose.noalias() += data_.J * (q - q0);
   const Fault f = model_.forward(q, data_);
   if (f != Fault::kNone) {

@@ -8,20 +8,24 @@
 
 namespace uhaptics {
 
-Mat3 PoseRotation::rotation(const Vec6& pose) noexcept {
-  const double ca = std::cos(pose(3)), sa = std::sin(pose(3));
-  const double cb = std::cos(pose(4)), sb = std::sin(pose(4));
-  const double cg = std::cos(pose(5)), sg = std::sin(pose(5));
-  // Rz(gamma) Ry(beta) Rx(alpha), multiplied out.
+namespace {
+// Rz(gamma) Ry(beta) Rx(alpha), multiplied out.
+Mat3 rotationFromTrig(double ca, double sa, double cb, double sb, double cg, double sg) noexcept {
   Mat3 R;
   R << cg * cb, cg * sb * sa - sg * ca, cg * sb * ca + sg * sa,  //
       sg * cb, sg * sb * sa + cg * ca, sg * sb * ca - cg * sa,   //
       -sb, cb * sa, cb * ca;
   return R;
 }
+}  // namespace
 
-PoseRotation::PoseRotation(const Vec6& pose) noexcept
-    : R(rotation(pose)), cos_gamma(std::cos(pose(5))), sin_gamma(std::sin(pose(5))) {
+Mat3 PoseRotation::rotation(const Vec6& pose) noexcept {
+  return rotationFromTrig(std::cos(pose(3)), std::sin(pose(3)), std::cos(pose(4)), std::sin(pose(4)), std::cos(pose(5)),
+                          std::sin(pose(5)));
+}
+
+PoseRotation::PoseRotation(const Vec6& pose) noexcept : cos_gamma(std::cos(pose(5))), sin_gamma(std::sin(pose(5))) {
+  R = rotationFromTrig(std::cos(pose(3)), std::sin(pose(3)), std::cos(pose(4)), std::sin(pose(4)), cos_gamma, sin_gamma);
   // Each angle turns about its own axis in the product Rz Ry Rx: dRx/dalpha = Rx [e_x]x, so
   // dR/dalpha = R [e_x]x; dR/dgamma = [e_z]x R; dR/dbeta = Rz Ry [e_y]x Rx = [Rz e_y]x R.
   const double cg = cos_gamma, sg = sin_gamma;

@@ -56,8 +56,7 @@ class TauKinematics {
   /// Whether a solution (pose, q) of the closure has every chain on the branch the mechanism is
   /// assembled in, given dg/dq there (forward() refuses the other branches). The default maps the
   /// pose back through inverse() and compares, to within `tolerance` (rad).
-  virtual bool onAssembledBranches(const Vec6& pose, const Vec6& q, const Mat6& dg_dq, double tolerance) const noexcept {
-    (void)dg_dq;
+  virtual bool onAssembledBranches(const Vec6& pose, const Vec6& q, const Mat6& /*dg_dq*/, double tolerance) const noexcept {
     Vec6 q_back;
     return inverse(pose, q_back) == Fault::kNone && (q_back - q).cwiseAbs().maxCoeff() <= tolerance;
   }
