@@ -2,6 +2,7 @@
 // devices/tau/params/tau.json claims for "rates/simulation_substeps", checked.
 #include <catch2/catch.hpp>
 #include <nlohmann/json.hpp>
+#include <limits>
 #include <vector>
 
 #include "renderer_fixtures.hpp"
@@ -145,6 +146,14 @@ TEST_CASE("Simulated TAU: holding the plant's linearization within 1e-3 rad chan
     CHECK(maxDifference(every, held) < 0.001 * peak);
     CHECK(closure <= model().fkTolerance());
     CHECK(maxDifference(every, held) > 0.0);  // some periods were held
+  }
+}
+
+TEST_CASE("Simulated TAU: a relinearize tolerance that is negative, too large or not a number is refused") {
+  for (const double tolerance : {-1e-4, 0.2, std::numeric_limits<double>::quiet_NaN()}) {
+    SimulatedTauOptions so;
+    so.relinearize_tolerance = tolerance;
+    CHECK_THROWS_WITH(SimulatedTau(model(), so), Catch::Contains("relinearize_tolerance must be in [0, 0.1] rad"));
   }
 }
 

@@ -30,6 +30,8 @@ SimulatedTau::SimulatedTau(const TauModel& model, const SimulatedTauOptions& opt
   if (!(options_.tool_damping >= 0.0) || !(options_.tool_rotational_damping >= 0.0) || !(options_.hand.stiffness >= 0.0) ||
       !(options_.hand.damping >= 0.0))
     throw Error("SimulatedTau: damping and hand parameters must be >= 0");
+  if (!(options_.relinearize_tolerance >= 0.0 && options_.relinearize_tolerance <= 0.1))
+    throw Error("SimulatedTau: relinearize_tolerance must be in [0, 0.1] rad");
   command_history_.assign(static_cast<std::size_t>(options_.max_delay_samples) + 1, Vec6::Zero());
   reset(model.homeJoints());
 }

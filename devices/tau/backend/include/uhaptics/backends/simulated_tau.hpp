@@ -39,7 +39,7 @@ struct SimulatedTauOptions {
   // The plant's lumped dynamics (M, gravity, velocity term), J and dg/dX's factorization are solved
   // again when any joint has moved more than this (rad) since they last were; within it they are
   // held (they change by about the tolerance, relatively), and the pose is still solved to the
-  // forward kinematics' tolerance with the held factorization. 0: solved every period.
+  // forward kinematics' tolerance with the held factorization. 0: solved every period. In [0, 0.1].
   double relinearize_tolerance = 0.0;
   std::uint64_t seed = 1;         // delay draws
   HandModel hand;
