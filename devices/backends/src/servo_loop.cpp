@@ -2,6 +2,7 @@
 
 #include <pthread.h>
 #include <sched.h>
+#include <sys/mman.h>
 #include <time.h>
 
 #include <Eigen/Core>
@@ -17,6 +18,21 @@
 #include "uhaptics/core/limits.hpp"
 
 namespace uhaptics {
+
+namespace {
+// Sanitizers map terabytes of shadow memory: mlockall() would try to make it resident.
+#if defined(__SANITIZE_ADDRESS__) || defined(__SANITIZE_THREAD__)
+constexpr bool kSanitized = true;
+#elif defined(__has_feature)
+#if __has_feature(address_sanitizer) || __has_feature(thread_sanitizer)
+constexpr bool kSanitized = true;
+#else
+constexpr bool kSanitized = false;
+#endif
+#else
+constexpr bool kSanitized = false;
+#endif
+}  // namespace
 namespace {
 
 // "'TAU' (code 2)": a protocol device code with the registered device that has it.
@@ -272,10 +288,17 @@ std::string ServoLoop::realtimeNote() const {
   const int s = realtime_state_.load();
   if (!config_.realtime) return "real-time scheduling not requested (SCHED_OTHER)";
   if (s == 0) return "real-time scheduling pending";
-  if (s == 1) return "servo thread runs SCHED_FIFO priority " + std::to_string(config_.realtime_priority);
+  const int m = memory_state_.load();
+  const std::string memory = !config_.lock_memory ? "memory not locked (not requested)"
+                             : kSanitized         ? "memory not locked (a sanitizer's shadow memory cannot be)"
+                             : m == 1             ? "memory locked"
+                             : m == 0             ? "memory lock pending"
+                                                  : std::string("memory lock refused (") + std::strerror(m) +
+                                                        "; raise memlock in /etc/security/limits.conf)";
+  if (s == 1) return "servo thread runs SCHED_FIFO priority " + std::to_string(config_.realtime_priority) + "; " + memory;
   return std::string("SCHED_FIFO refused (") + std::strerror(s) +
          "): running SCHED_OTHER, expect more jitter. Grant it with `ulimit -r " +
-         std::to_string(config_.realtime_priority) + "` (rtprio in /etc/security/limits.conf) or CAP_SYS_NICE";
+         std::to_string(config_.realtime_priority) + "` (rtprio in /etc/security/limits.conf) or CAP_SYS_NICE; " + memory;
 }
 
 void ServoLoop::run() noexcept {
@@ -284,6 +307,12 @@ void ServoLoop::run() noexcept {
     param.sched_priority = config_.realtime_priority;
     const int err = pthread_setschedparam(pthread_self(), SCHED_FIFO, &param);
     realtime_state_.store(err == 0 ? 1 : err);
+    if (config_.lock_memory && !kSanitized) {
+      // Touch the stack the loop will use before locking, so it is resident too.
+      volatile char stack[64 * 1024];
+      for (std::size_t i = 0; i < sizeof(stack); i += 4096) stack[i] = 0;
+      memory_state_.store(mlockall(MCL_CURRENT) == 0 ? 1 : errno);
+    }
   }
   std::int64_t deadline = monotonicNs();
   std::int64_t previous_wake = deadline;
@@ -315,6 +344,7 @@ void ServoLoop::run() noexcept {
   DeviceSnapshot last;
   fillSnapshot(last);
   last.link = LinkState::kStopped;
+  if (renderer_ != nullptr) renderer_->noReading(last);  // it renders no more
   snapshots_.write(last);  // command_sent stays zero: zero was the last command
 }
 
@@ -337,6 +367,7 @@ void ServoLoop::tripWatchdog(ServoEventKind why, double periods) noexcept {
 
 void ServoLoop::tick() noexcept {
   ++tick_;
+  rendered_ = false;
   bump(counters_.ticks);
   switch (link_) {
     case LinkState::kDisconnected: {
@@ -363,6 +394,11 @@ void ServoLoop::tick() noexcept {
     }
     case LinkState::kRunning: runningTick(); break;
     case LinkState::kStopped: break;  // only in the snapshot run() leaves behind
+  }
+  if (renderer_ != nullptr && !rendered_) {
+    DeviceSnapshot state;
+    fillSnapshot(state);
+    renderer_->noReading(state);
   }
   publish();
 }
@@ -457,6 +493,7 @@ void ServoLoop::computeCommand(bool fresh) noexcept {
   DeviceSnapshot state;
   fillSnapshot(state);
   if (renderer_ != nullptr) {
+    rendered_ = true;
     renderer_->render(state, request_, raw.data());
   } else {
     for (int i = 0; i < device_.actuators; ++i) raw[i] = i < request_.count ? request_.effort[i] : 0.0;

@@ -36,7 +36,14 @@ struct ServoConfig {
   std::uint32_t board_watchdog_us = 0;  // board watchdog; 0 = max(5 periods, 5 ms)
   int receive_timeout_us = 0;         // wait for STATE each period; 0 = half a period
   bool realtime = true;               // try SCHED_FIFO (needs CAP_SYS_NICE or an rtprio limit)
-  int realtime_priority = 80;
+  /// SCHED_FIFO priority. CHAI3D's haptic thread asks for 99 on Linux: the servo loop asks the
+  /// same, the highest SCHED_FIFO has (equal priorities do not preempt each other; on a machine
+  /// with two or more cores both run).
+  int realtime_priority = 99;
+  /// With realtime: lock the process's current pages (mlockall(MCL_CURRENT)) so the servo thread
+  /// never waits on a page fault. Not MCL_FUTURE: an application past its memlock limit would then
+  /// fail its own allocations.
+  bool lock_memory = true;
   int reconnect_interval_ms = 100;    // while unplugged: how often to look for the device
   int handshake_timeout_ms = 500;     // connect(): how long to wait for each handshake answer
   void validate() const;              // throws Error
@@ -73,6 +80,10 @@ class ServoRenderer {
   virtual ~ServoRenderer() = default;
   /// Writes `actuators` efforts. Must not allocate, block or throw; anything it writes is checked.
   virtual void render(const DeviceSnapshot& state, const EffortRequest& request, double* efforts) noexcept = 0;
+  /// A period in which render() was not called: no valid STATE arrived (a late frame holds the
+  /// previous command), the host watchdog holds the device at zero, or the board is disconnected or
+  /// reconnecting (state.link, state.host_watchdog_tripped say which). Same rules as render().
+  virtual void noReading(const DeviceSnapshot& state) noexcept { (void)state; }
 };
 
 enum class ServoEventKind : std::uint8_t {
@@ -182,6 +193,7 @@ class ServoLoop {
   std::thread thread_;
   std::atomic<bool> running_{false};
   std::atomic<int> realtime_state_{0};  // 0 not requested, 1 SCHED_FIFO, else errno of the refusal
+  std::atomic<int> memory_state_{0};    // 0 not requested, 1 locked, else errno of the refusal
   TimingStats timing_;
 
   TripleBuffer<EffortRequest> requests_;
@@ -195,6 +207,7 @@ class ServoLoop {
   bool have_rx_sequence_ = false, watchdog_tripped_ = false;
   int consecutive_missed_ = 0;
   std::uint32_t clamped_channels_ = 0;
+  bool rendered_ = false;  // the renderer ran this period
   wire::BoardError last_board_error_ = wire::BoardError::kNone;
   wire::DecoderStats decoder_;
   wire::Frame rx_frame_, tx_frame_;
