@@ -22,11 +22,6 @@ class PointMassPlant final : public uhaptics::BoardPlant {
     Eigen::Map<uhaptics::Vec3> out(positions);
     out = position;
   }
-  bool readJointRates(double* rates) noexcept override {
-    Eigen::Map<uhaptics::Vec3> out(rates);
-    out = velocity;
-    return true;
-  }
   void applyCommand(const double* efforts) noexcept override { actuator = Eigen::Map<const uhaptics::Vec3>(efforts); }
   void setUserForce(const uhaptics::Vec3& force) noexcept override { user = force; }
   void advance(double dt) noexcept override {

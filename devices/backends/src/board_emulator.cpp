@@ -258,6 +258,11 @@ void BoardEmulator::service() noexcept {
   advanceLocked(Clock::now());
 }
 
+void BoardEmulator::setUserForce(const Vec3& force) noexcept {
+  const std::lock_guard<std::mutex> lock(mutex_);
+  plant_.setUserForce(force);
+}
+
 BoardEmulator::Snapshot BoardEmulator::snapshot() const noexcept {
   const std::lock_guard<std::mutex> lock(mutex_);
   Snapshot s;

@@ -59,7 +59,6 @@ class SimJointIo final : public JointIo {
     return plant_->lastFault();
   }
   bool movesOnlyInAdvance() const noexcept override { return true; }
-  bool readRates(double* rates) noexcept override { return plant_ && plant_->readJointRates(rates); }
   bool readActual(double* positions) noexcept override { return plant_ && plant_->readActualJoints(positions); }
   void setUserForce(const Vec3& force) noexcept override {
     if (plant_) plant_->setUserForce(force);
@@ -77,9 +76,9 @@ class SimJointIo final : public JointIo {
 class ServoJointIo final : public JointIo {
  public:
   ServoJointIo(const DeviceDefinition& device, BoardSpec spec, std::string backend, ServoConfig servo, ServoRenderer* renderer,
-               std::shared_ptr<BoardEmulatorControl> control)
+               std::shared_ptr<BoardEmulatorControl> control, std::function<std::unique_ptr<BoardPlant>()> emulated_plant)
       : JointIo(std::move(spec), std::move(backend)), device_(device), servo_(servo), renderer_(renderer),
-        control_(std::move(control)) {
+        control_(std::move(control)), emulated_plant_(std::move(emulated_plant)) {
     if (servo_.rate_hz == 0.0) servo_.rate_hz = this->spec().servo_rate_hz;
     if (servo_.board_watchdog_us == 0) servo_.board_watchdog_us = this->spec().board_watchdog_us;
     servo_.validate();
@@ -93,12 +92,16 @@ class ServoJointIo final : public JointIo {
       if (backend() == "usb") {
         transport_ = std::make_unique<LibusbTransport>(d);  // throws: no device found (lists what was)
       } else {
-        plant_ = device_.make_plant(spec().params_path);
+        plant_ = emulated_plant_ ? emulated_plant_() : device_.make_plant(spec().params_path);
+        if (!plant_ || plant_->jointCount() != d.joints || plant_->actuatorCount() != d.actuators)
+          throw Error("emulated '" + d.name + "': the plant does not have the board's " + std::to_string(d.joints) +
+                      " joints and " + std::to_string(d.actuators) + " actuators");
         BoardEmulator::Config board;
         board.device = d.type;
         board.sample_rate_hz = spec().sample_rate_hz;
         board.effort_limit = d.effort_limit;
         auto emulator = std::make_unique<BoardEmulator>(board, *plant_);
+        emulator_ = emulator.get();
         if (control_) control_->attach(emulator.get());
         transport_ = std::move(emulator);
       }
@@ -114,6 +117,7 @@ class ServoJointIo final : public JointIo {
     if (loop_) loop_->stop();  // commands zero before the thread ends
     loop_.reset();
     if (control_) control_->attach(nullptr);
+    emulator_ = nullptr;
     transport_.reset();
     plant_.reset();
     have_state_ = stopped_ = false;
@@ -137,6 +141,9 @@ class ServoJointIo final : public JointIo {
     loop_->request(r);  // the servo loop's safety stage checks it before it leaves the host
   }
   Fault advance(double) noexcept override { return Fault::kNone; }
+  void setUserForce(const Vec3& force) noexcept override {
+    if (emulator_ != nullptr) emulator_->setUserForce(force);
+  }
   LinkStatus linkStatus() const noexcept override {
     if (!loop_) return LinkStatus::kClosed;
     if (stopped_ || snapshot_.link == LinkState::kStopped) return LinkStatus::kStopped;
@@ -160,9 +167,11 @@ class ServoJointIo final : public JointIo {
   ServoConfig servo_;
   ServoRenderer* renderer_;
   std::unique_ptr<BoardPlant> plant_;
+  BoardEmulator* emulator_ = nullptr;  // transport_ on emulated
   std::unique_ptr<Transport> transport_;
   std::unique_ptr<ServoLoop> loop_;
   std::shared_ptr<BoardEmulatorControl> control_;
+  std::function<std::unique_ptr<BoardPlant>()> emulated_plant_;
   DeviceSnapshot snapshot_;
   bool have_state_ = false, stopped_ = false;
 };
@@ -209,6 +218,8 @@ std::unique_ptr<JointIo> makeJointIo(const std::string& device, const std::strin
   const auto backends = jointIoBackends();
   if (std::find(backends.begin(), backends.end(), backend) == backends.end())
     throw Error("unknown backend '" + backend + "' for device '" + device + "': use sim, emulated or usb");
+  if (options.emulated_plant && backend != "emulated")
+    throw Error("device '" + device + "': emulated_plant is given but the backend is " + backend);
   if (options.emulator_control && backend != "emulated")
     throw Error("device '" + device + "': emulator_control is given but the backend is " + backend +
                 "; board faults can be injected only with the emulated backend");
@@ -220,7 +231,7 @@ std::unique_ptr<JointIo> makeJointIo(const std::string& device, const std::strin
     return makeSimJointIo(std::move(spec), [&definition, path] { return definition.make_plant(path); });
   }
   return std::make_unique<ServoJointIo>(definition, std::move(spec), backend, options.servo, options.renderer,
-                                        options.emulator_control);
+                                        options.emulator_control, options.emulated_plant);
 }
 
 }  // namespace uhaptics

@@ -61,6 +61,9 @@ class BoardEmulator final : public Transport {
   void replug() noexcept;
   /// Advances the board to now without host traffic (a dead host: lets the board watchdog act).
   void service() noexcept;
+  /// The user's hand on the board's device: BoardPlant::setUserForce() of its plant (a CHAI3D
+  /// session's scripted hand moves the emulated device as it moves the simulated one).
+  void setUserForce(const Vec3& force) noexcept;
 
   // Inspection (any thread).
   struct Snapshot {

@@ -27,12 +27,6 @@ class BoardPlant {
 
   // What a simulation offers beyond a board (the "sim" joint I/O passes it on; the board emulator
   // does not use it).
-  /// The joint rates the simulation knows exactly, jointCount() entries; false when it has none
-  /// (the caller then differentiates the positions, as it does for a board).
-  virtual bool readJointRates(double* rates) noexcept {
-    (void)rates;
-    return false;
-  }
   /// The joint positions as they are, without the sensors' error (encoder quantization),
   /// jointCount() entries; false when the plant models no sensor error.
   virtual bool readActualJoints(double* positions) noexcept {

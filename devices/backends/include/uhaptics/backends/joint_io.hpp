@@ -35,6 +35,9 @@ struct JointIoOptions {
   /// Servo loop settings (emulated, usb). rate_hz and board_watchdog_us of 0 take the file's values.
   ServoConfig servo = defaultServo();
   ServoRenderer* renderer = nullptr;  // optional, runs in the servo thread (emulated, usb)
+  /// emulated only: the device behind the board emulator (e.g. a CHAI3D device's simulated plant,
+  /// whose user is the caller's scripted hand); empty: the registered device's own plant and user.
+  std::function<std::unique_ptr<BoardPlant>()> emulated_plant;
   /// emulated only: the handle through which a test or the soak run injects board faults into the
   /// open session (BoardEmulatorControl); refused with the other backends.
   std::shared_ptr<BoardEmulatorControl> emulator_control;
@@ -85,20 +88,15 @@ class JointIo {
   /// Whether the device moves only in advance() (sim): a reading taken right after it is the newest
   /// there will be until the next advance(). A board moves on its own clock instead.
   virtual bool movesOnlyInAdvance() const noexcept { return false; }
-  /// The joint rates of the last read() when the backend knows them exactly (sim); false otherwise
-  /// (the caller then differentiates positions over sampleTimeUs(), e.g. with JointRateEstimator).
-  virtual bool readRates(double* rates) noexcept {
-    (void)rates;
-    return false;
-  }
   /// sim: the joint positions of the last read() as they are, without the simulated sensors' error
   /// (BoardPlant::readActualJoints); false when there is no such thing (a board, an ideal sensor).
+  /// Only the TAU's sim scene still uses it (docs/tau.md, "What the scene sees of a simulated TAU").
   virtual bool readActual(double* positions) noexcept {
     (void)positions;
     return false;
   }
-  /// sim: the force [N] of a user the caller simulates on the end effector, in the device model's
-  /// task frame (BoardPlant::setUserForce). emulated/usb: ignored (the board's device has its user).
+  /// sim and emulated: the force [N] of a user the caller simulates on the end effector, in the
+  /// device model's task frame (BoardPlant::setUserForce). usb: ignored (the user is a person).
   virtual void setUserForce(const Vec3& force) noexcept { (void)force; }
 
   /// Why read() has (or has no) reading: kRunning while read() succeeds.
@@ -119,7 +117,7 @@ class JointIo {
   std::string backend_;
 };
 
-/// Joint rates from successive readings: backward difference over the device's own sample clock
+/// Joint rates from successive readings, the same on every backend: backward difference over the device's own sample clock
 /// (not the host's wake-up time, which jitters), correct across the 32-bit clock wrap. A repeated
 /// sample (same timestamp: the board has not sampled again yet) keeps the previous rate instead of
 /// reading as a stop. The first reading after reset() gives zero rates. No allocation.

@@ -39,11 +39,6 @@ class PlanarLinkagePlant final : public HeldTorquePlant<N> {
     const long n = clock_.take(dt);
     if (n > 0) fault_ = sim_.step(this->command_, static_cast<double>(n) * clock_.period());
   }
-  bool readJointRates(double* rates) noexcept override {
-    Eigen::Map<Vec<N>> out(rates);
-    out = sim_.velocity();
-    return true;
-  }
   void setUserForce(const Vec3& force) noexcept override {
     load_.bias = force.template head<2>();
     sim_.setLoad(load_);

@@ -27,11 +27,6 @@ class TauBoardPlant final : public HeldTorquePlant<6> {
   };
   TauBoardPlant(TauModel model, const Options& options);
   void advance(double dt) noexcept override;
-  bool readJointRates(double* rates) noexcept override {
-    Eigen::Map<Vec6> out(rates);
-    out = sim_.qd();
-    return true;
-  }
   bool readActualJoints(double* positions) noexcept override {
     Eigen::Map<Vec6> out(positions);
     out = sim_.q();
