@@ -26,6 +26,7 @@ uhaptics::DeviceSelection boardSelection(const std::string& device, const std::s
   uhaptics::DeviceSelection s;
   s.device = device;
   s.backend = backend;
+  s.hand_enabled = false;  // the emulated board's own device and user (what these tests are about)
   return s;
 }
 

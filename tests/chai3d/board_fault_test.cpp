@@ -11,6 +11,7 @@
 #include <catch2/catch.hpp>
 
 #include <chrono>
+#include <cmath>
 #include <functional>
 #include <iostream>
 #include <memory>
@@ -207,6 +208,39 @@ TEST_CASE("after getServoLoop()->stop() the device reports the link stopped, not
     CHECK(s.device->getLinkStatus() == LinkStatus::kStopped);
     CHECK(s.device->getLastFault() == uhaptics::Fault::kDeviceError);
     CHECK(s.device->getSessionStats().ticks_without_reading > 0);
+    CHECK(s.device->close());
+  }
+}
+
+TEST_CASE("a stalled application: 100 ms without input, the board's efforts ramp to zero in the stated periods, "
+          "then the session renders again, for every device", "[chai3d][board][stall]") {
+  for (const std::string& name : uhaptics::adapter::deviceNames()) {
+    INFO(name);
+    Session s(name);
+    openInContact(s);
+    const std::uint64_t before = s.device->getSessionStats().stale_input_episodes;
+    // The application's haptic thread stops calling the device (a breakpoint, a long collision
+    // query); this thread only watches the board. Periods are counted in board commands.
+    const std::uint64_t stall_start = s.boardState().commands_applied;
+    std::uint64_t zero_after = 0;
+    const auto t0 = std::chrono::steady_clock::now();
+    while (std::chrono::steady_clock::now() - t0 < std::chrono::milliseconds(100)) {
+      if (zero_after == 0 && s.boardZero()) zero_after = s.boardState().commands_applied - stall_start;
+      std::this_thread::sleep_for(std::chrono::microseconds(200));
+    }
+    // Stale after stale_time, then kStaleRampPeriods to zero; one period more for the exchange
+    // (the command computed in a period reaches the board in the next) and one for this thread's
+    // polling.
+    const double periods_stale = s.device->getStaleTime() / s.device->getServoPeriod();
+    const auto bound = static_cast<std::uint64_t>(std::ceil(periods_stale)) + cUhapticsDevice::kStaleRampPeriods + 2;
+    CHECK(zero_after > 0);
+    CHECK(zero_after <= bound);
+    CHECK(s.boardZero());
+    CHECK(s.device->getSessionStats().stale_input_episodes >= before + 1);
+    // Back: the application calls again and the device renders its force.
+    REQUIRE(s.runUntil([&] { return s.linkRunning() && s.boardApplying(); }));
+    std::cout << name << ", application stalled 100 ms: board at zero after " << zero_after << " periods (bound "
+              << bound << "), rendering again\n";
     CHECK(s.device->close());
   }
 }

@@ -221,8 +221,8 @@ class CountingJointIo final : public uhaptics::JointIo {
   }
   uhaptics::Fault advance(double dt) noexcept override { return inner_->advance(dt); }
   bool movesOnlyInAdvance() const noexcept override { return inner_->movesOnlyInAdvance(); }
-  bool readRates(double* rates) noexcept override { return inner_->readRates(rates); }
   bool readActual(double* positions) noexcept override { return inner_->readActual(positions); }
+  void setUserForce(const uhaptics::Vec3& force) noexcept override { inner_->setUserForce(force); }
   std::string describe() const override { return inner_->describe() + ", counted"; }
   int commands = 0;
 

@@ -16,14 +16,34 @@ namespace {
 uhaptics::Vec3 toEigen(const cVector3d& v) { return uhaptics::Vec3(v(0), v(1), v(2)); }
 cVector3d toChai(const uhaptics::Vec3& v) { return cVector3d(v(0), v(1), v(2)); }
 
+std::int64_t steadyNs() {
+  return std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::steady_clock::now().time_since_epoch()).count();
+}
+
 }  // namespace
+
+// What the board's servo loop runs each period: the device's policy (sense, render) on that
+// period's reading.
+class cUhapticsDevice::ServoBridge final : public uhaptics::ServoRenderer {
+ public:
+  explicit ServoBridge(cUhapticsDevice& a_device) : m_device(a_device) {}
+  void render(const uhaptics::DeviceSnapshot& a_state, const uhaptics::EffortRequest&, double* a_efforts) noexcept override {
+    m_device.servoTick(a_state, a_efforts);
+  }
+  void noReading(const uhaptics::DeviceSnapshot& a_state) noexcept override { m_device.servoNoReading(a_state); }
+
+ private:
+  cUhapticsDevice& m_device;
+};
 
 cUhapticsDevice::cUhapticsDevice(unsigned int a_deviceNumber, const uhaptics::DeviceSelection& a_selection,
                                  double a_servoPeriod, int a_joints, int a_actuators)
     : cGenericHapticDevice(a_deviceNumber),
       m_selection(a_selection),
       m_servoPeriod(a_servoPeriod),
-      m_handEnabled(a_selection.hand_enabled && a_selection.backend == "sim"),
+      m_servoThreadRenders(a_selection.backend != "sim"),
+      m_staleTime(a_selection.option("stale_time", 0.06, 0.001, 1.0)),
+      m_handEnabled(a_selection.hand_enabled && a_selection.backend != "usb"),
       m_joints(a_joints),
       m_actuators(a_actuators),
       m_statsPath(a_selection.stats_path) {
@@ -38,6 +58,7 @@ cUhapticsDevice::cUhapticsDevice(unsigned int a_deviceNumber, const uhaptics::De
   m_deviceAvailable = true;
   m_deviceReady = false;
   m_hand = std::make_unique<uhaptics::ScriptedHand>(a_selection.hand, 1.0, uhaptics::Vec3::Zero());
+  m_bridge = std::make_unique<ServoBridge>(*this);
 }
 
 cUhapticsDevice::~cUhapticsDevice() { stopStatsWriter(); }
@@ -78,12 +99,16 @@ std::unique_ptr<uhaptics::JointIo> cUhapticsDevice::makeJointIo() {
   if (options.params_dir.empty()) options.params_dir = paramsDirectory();
   if (options.renderer != nullptr)
     throw uhaptics::Error("device '" + m_selection.device + "': the selection's joint_io.renderer must be empty (the "
-                          "CHAI3D device renders in its own ticks)");
+                          "CHAI3D device runs its own policy in the servo thread)");
   if (options.emulator_control && m_selection.backend != "emulated")
     throw uhaptics::Error("device '" + m_selection.device + "': joint_io.emulator_control needs the emulated backend, not " +
                           m_selection.backend);
   std::unique_ptr<uhaptics::JointIo> io;
   if (m_selection.backend != "sim") {
+    options.renderer = m_bridge.get();
+    // The emulated board's device: with the scripted hand, the same simulated plant as on sim,
+    // pushed by the hand each servo period; without it, the board's own device and user.
+    if (m_selection.backend == "emulated" && m_handEnabled) options.emulated_plant = [this] { return makeSimulatedPlant(); };
     io = uhaptics::makeJointIo(m_selection.device, m_selection.backend, options);
   } else {
     const uhaptics::DeviceDefinition& definition = uhaptics::findDevice(m_selection.device);
@@ -97,17 +122,47 @@ std::unique_ptr<uhaptics::JointIo> cUhapticsDevice::makeJointIo() {
 
 bool cUhapticsDevice::readJointsLocked(bool a_first) noexcept {
   if (!m_io->read(m_positions.data())) return false;
+  senseLocked(m_positions.data(), m_io->readActual(m_actual.data()) ? m_actual.data() : m_positions.data(),
+              m_io->sampleTimeUs(), a_first);
+  return true;
+}
+
+void cUhapticsDevice::senseLocked(const double* a_positions, const double* a_actual, std::uint32_t a_sampleUs,
+                                  bool a_first) noexcept {
   if (a_first) m_rateEstimator.reset();
-  if (!m_io->readRates(m_rates.data())) {
-    m_rateEstimator.update(m_positions.data(), m_joints, m_io->sampleTimeUs(), m_rates.data());
-  }
+  m_rateEstimator.update(a_positions, m_joints, a_sampleUs, m_rates.data());
   JointReading reading;
-  reading.positions = m_positions.data();
+  reading.positions = a_positions;
   reading.rates = m_rates.data();
-  reading.actual = m_io->readActual(m_actual.data()) ? m_actual.data() : m_positions.data();
+  reading.actual = a_actual;
   reading.first = a_first;
   sense(reading);
-  return true;
+}
+
+uhaptics::Fault cUhapticsDevice::renderChecked(const ServoInput& a_input) noexcept {
+  uhaptics::Fault fault = render(a_input, m_efforts.data());
+  bool finite = true;
+  for (int i = 0; i < m_actuators; ++i) finite = finite && std::isfinite(m_efforts[i]);
+  if (fault != uhaptics::Fault::kNone || !finite) {
+    if (fault == uhaptics::Fault::kNone) fault = uhaptics::Fault::kNonFiniteResult;
+    m_efforts.fill(0.0);
+  }
+  return fault;
+}
+
+void cUhapticsDevice::pushHandLocked(double a_time) noexcept {
+  if (!m_handEnabled) return;
+  m_io->setUserForce(deviceToModelForce(m_hand->force(a_time, m_state.position, m_state.linearVelocity)));
+}
+
+void cUhapticsDevice::recordTickLocked(double a_force, uhaptics::Fault a_fault) noexcept {
+  double output = 0.0;
+  for (int i = 0; i < m_actuators; ++i) output = std::max(output, std::abs(m_efforts[i]));
+  m_stats.recordTick(a_force, output, a_fault != uhaptics::Fault::kNone);
+  const double radius = m_specifications.m_workspaceRadius;
+  if (radius > 0.0) {
+    m_stats.recordPosition(m_state.position.x() / radius, m_state.position.y() / radius, m_state.position.z() / radius);
+  }
 }
 
 void cUhapticsDevice::commandZeroLocked() noexcept {
@@ -116,7 +171,7 @@ void cUhapticsDevice::commandZeroLocked() noexcept {
 }
 
 bool cUhapticsDevice::open() {
-  std::lock_guard<std::mutex> lock(m_mutex);
+  std::unique_lock<std::mutex> lock(m_mutex);
   if (m_deviceReady) return C_SUCCESS;
   try {
     // The scripted hand's path is in workspace radii: scale it to this device now that the
@@ -124,6 +179,7 @@ bool cUhapticsDevice::open() {
     m_hand = std::make_unique<uhaptics::ScriptedHand>(m_hand->options(), m_specifications.m_workspaceRadius,
                                                       uhaptics::Vec3::Zero());
     m_io = makeJointIo();
+    m_servoArmed.store(false);  // a board's servo thread sends zero until the policy is reset
     m_io->open();  // throws with what to do: no board found (and what was), permission, version
     const uhaptics::DeviceDescriptor& d = m_io->spec().descriptor;
     if (d.joints != m_joints || d.actuators != m_actuators) {
@@ -132,21 +188,55 @@ bool cUhapticsDevice::open() {
                             std::to_string(m_joints) + " and " + std::to_string(m_actuators));
     }
     resetRendering();
+    m_ticks = 0;
+    m_lastFault = uhaptics::Fault::kNone;
+    m_stats.start(wallTime());
     // A board's servo loop connects in open(); its first STATE takes a few periods.
     constexpr double kFirstReadingTimeout = 2.0;  // [s]
     const auto deadline = Clock::now() + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(kFirstReadingTimeout));
-    while (!readJointsLocked(true)) {
-      commandZeroLocked();
+    const auto noReading = [&] {
       if (Clock::now() > deadline) {
         throw uhaptics::Error("no joint reading from '" + m_io->describe() + "' within " +
                               std::to_string(kFirstReadingTimeout) + " s");
       }
-      std::this_thread::sleep_for(std::chrono::milliseconds(1));
+    };
+    if (m_servoThreadRenders) {
+      // The servo thread senses its first reading (and renders zero input: none is published).
+      {
+        std::lock_guard<std::mutex> app(m_appMutex);
+        m_inputSequence = 0;
+        m_published = PublishedState{};
+      }
+      m_servoFirst = true;
+      m_staleTicks = 0;
+      m_heldEfforts.fill(0.0);
+      m_servoInput = ContactInput{};
+      m_servoArmed.store(true, std::memory_order_release);
+      lock.unlock();
+      for (;;) {
+        {
+          std::lock_guard<std::mutex> app(m_appMutex);
+          pullStateLocked();
+          if (m_published.sensed) break;
+        }
+        noReading();
+        std::this_thread::sleep_for(std::chrono::milliseconds(1));
+      }
+      lock.lock();
+    } else {
+      while (!readJointsLocked(true)) {
+        commandZeroLocked();
+        noReading();
+        std::this_thread::sleep_for(std::chrono::milliseconds(1));
+      }
+      m_sensedAfterAdvance = true;  // the first tick renders from this reading
     }
     checkFirstReading();
-    m_sensedAfterAdvance = true;  // the first tick renders from this reading
   } catch (const std::exception& e) {
+    m_servoArmed.store(false);
+    if (lock.owns_lock()) lock.unlock();  // the servo thread may be waiting for it to finish its period
     if (m_io) m_io->close();  // nothing half-open: no servo thread, nothing commanded
+    lock.lock();
     m_io.reset();
     std::fprintf(stderr, "uhaptics: cannot open device '%s' (backend %s): %s\n", m_selection.device.c_str(),
                  m_selection.backend.c_str(), e.what());
@@ -154,24 +244,30 @@ bool cUhapticsDevice::open() {
   }
   m_commandForce.setZero();
   m_commandTorque.setZero();
-  m_ticks = 0;
-  m_lastFault = uhaptics::Fault::kNone;
-  m_linkStatus = m_io->linkStatus();
+  if (!m_servoThreadRenders) m_linkStatus = m_io->linkStatus();
   m_origin = Clock::now();
-  m_stats.start(wallTime());
-  m_deviceReady = true;
+  {
+    std::lock_guard<std::mutex> app(m_appMutex);  // the application's getters read it under this lock on a board
+    m_deviceReady = true;
+  }
   startStatsWriter();
   return C_SUCCESS;
 }
 
 bool cUhapticsDevice::close() {
   {
-    std::lock_guard<std::mutex> lock(m_mutex);
+    std::unique_lock<std::mutex> lock(m_mutex);
     if (!m_deviceReady) return C_SUCCESS;
-    m_deviceReady = false;
+    {
+      std::lock_guard<std::mutex> app(m_appMutex);
+      m_deviceReady = false;
+    }
+    m_servoArmed.store(false);  // the servo thread's next periods send zero
     commandZeroLocked();
     endSession();
+    lock.unlock();  // a servo period in progress finishes first
     m_io->close();  // zero effort, servo thread stopped, interface released
+    lock.lock();
     m_io.reset();
   }
   stopStatsWriter();
@@ -192,8 +288,8 @@ void cUhapticsDevice::setLockStep(bool a_lockStep) {
 }
 
 double cUhapticsDevice::getSimulationTime() {
-  std::lock_guard<std::mutex> lock(m_mutex);
-  return static_cast<double>(m_ticks) * m_servoPeriod;
+  const auto lock = lockApplication(false);
+  return static_cast<double>(m_servoThreadRenders ? m_published.ticks : m_ticks) * m_servoPeriod;
 }
 
 void cUhapticsDevice::setScriptedHand(const uhaptics::ScriptedHandOptions& a_options) {
@@ -205,7 +301,8 @@ void cUhapticsDevice::setScriptedHand(const uhaptics::ScriptedHandOptions& a_opt
 
 void cUhapticsDevice::setScriptedHandEnabled(bool a_enabled) {
   std::lock_guard<std::mutex> lock(m_mutex);
-  m_handEnabled = a_enabled && m_selection.backend == "sim";
+  // On emulated the choice also picks the board's device (open() makes it): only while closed.
+  if (m_selection.backend == "sim" || (m_selection.backend == "emulated" && !m_deviceReady)) m_handEnabled = a_enabled;
 }
 
 void cUhapticsDevice::setStatsFile(const std::string& a_path) {
@@ -217,22 +314,22 @@ void cUhapticsDevice::setStatsFile(const std::string& a_path) {
 uhaptics::SessionStatsSnapshot cUhapticsDevice::getSessionStats() const { return m_stats.snapshot(wallTime()); }
 
 uhaptics::LinkStatus cUhapticsDevice::getLinkStatus() {
-  std::lock_guard<std::mutex> lock(m_mutex);
-  return m_deviceReady ? m_linkStatus : uhaptics::LinkStatus::kClosed;
+  const auto lock = lockApplication(false);
+  if (!m_deviceReady) return uhaptics::LinkStatus::kClosed;
+  return m_servoThreadRenders ? m_published.link : m_linkStatus;
 }
 
 uhaptics::Fault cUhapticsDevice::getLastFault() {
-  std::lock_guard<std::mutex> lock(m_mutex);
-  return m_lastFault;
+  const auto lock = lockApplication(false);
+  return m_servoThreadRenders ? m_published.fault : m_lastFault;
 }
 
 void cUhapticsDevice::tickLocked() noexcept {
   const double t = static_cast<double>(m_ticks) * m_servoPeriod;
   const bool sendForce = m_forcesEnabled;
   uhaptics::Fault fault = uhaptics::Fault::kNone;
-  double output = 0.0;
   const uhaptics::Vec3 seen = m_state.position;
-  // A board's newest sample now; a simulation's reading from right after its last step.
+  // The reading from right after the simulation's last step.
   const bool reading = m_sensedAfterAdvance || readJointsLocked(false);
   m_linkStatus = m_io->linkStatus();
   m_stats.recordReading(reading);
@@ -247,30 +344,130 @@ void cUhapticsDevice::tickLocked() noexcept {
     input.seenPosition = seen;
     input.dt = m_servoPeriod;
     input.time = t;
-    fault = render(input, m_efforts.data());
-    bool finite = true;
-    for (int i = 0; i < m_actuators; ++i) finite = finite && std::isfinite(m_efforts[i]);
-    if (fault != uhaptics::Fault::kNone || !finite) {
-      if (fault == uhaptics::Fault::kNone) fault = uhaptics::Fault::kNonFiniteResult;
-      m_efforts.fill(0.0);
-    }
-    for (int i = 0; i < m_actuators; ++i) output = std::max(output, std::abs(m_efforts[i]));
+    fault = renderChecked(input);
     m_io->command(m_efforts.data());
   }
-  if (m_handEnabled) {
-    m_io->setUserForce(deviceToModelForce(m_hand->force(t, m_state.position, m_state.linearVelocity)));
-  }
+  pushHandLocked(t);
   const uhaptics::Fault backend = m_io->advance(m_servoPeriod);
   if (fault == uhaptics::Fault::kNone) fault = backend;
-  // A simulation moved only now: sense its new state, which the application reads next.
+  // The simulation moved only now: sense its new state, which the application reads next.
   m_sensedAfterAdvance = m_io->movesOnlyInAdvance() && readJointsLocked(false);
   m_lastFault = fault;
   ++m_ticks;
-  m_stats.recordTick(sendForce ? m_commandForce.norm() : 0.0, output, m_lastFault != uhaptics::Fault::kNone);
-  const double radius = m_specifications.m_workspaceRadius;
-  if (radius > 0.0) {
-    m_stats.recordPosition(m_state.position.x() / radius, m_state.position.y() / radius, m_state.position.z() / radius);
+  recordTickLocked(sendForce ? m_commandForce.norm() : 0.0, m_lastFault);
+}
+
+void cUhapticsDevice::servoTick(const uhaptics::DeviceSnapshot& a_snapshot, double* a_efforts) noexcept {
+  std::fill(a_efforts, a_efforts + m_actuators, 0.0);
+  if (!m_servoArmed.load(std::memory_order_acquire)) return;  // open() has not reset the policy yet
+  std::lock_guard<std::mutex> lock(m_mutex);
+  if (!m_servoArmed.load(std::memory_order_relaxed)) return;  // close() came first
+  const double t = static_cast<double>(m_ticks) * m_servoPeriod;
+  const uhaptics::Vec3 sensedBefore = m_state.position;
+  senseLocked(a_snapshot.position.data(), a_snapshot.position.data(), a_snapshot.sample_time_us[0], m_servoFirst);
+  const bool first = m_servoFirst;
+  m_servoFirst = false;
+  m_stats.recordReading(true);
+  m_linkStatus = uhaptics::LinkStatus::kRunning;
+
+  // The application's input: nothing published yet is a zero force (an application that only
+  // reads the device); published and then silent past the stale time is a stall.
+  m_inputExchange.read(m_servoInput);
+  const bool published = m_servoInput.sequence != 0;
+  const bool stale = published && static_cast<double>(steadyNs() - m_servoInput.stampNs) > m_staleTime * 1e9;
+  m_stats.recordInput(stale);
+  uhaptics::Fault fault = uhaptics::Fault::kNone;
+  double force = 0.0;
+  if (!stale) {
+    ServoInput input;
+    input.force = published ? uhaptics::Vec3(m_servoInput.force[0], m_servoInput.force[1], m_servoInput.force[2])
+                            : uhaptics::Vec3::Zero();
+    input.torque = published ? uhaptics::Vec3(m_servoInput.torque[0], m_servoInput.torque[1], m_servoInput.torque[2])
+                             : uhaptics::Vec3::Zero();
+    input.seenPosition = published ? uhaptics::Vec3(m_servoInput.seen[0], m_servoInput.seen[1], m_servoInput.seen[2])
+                                   : (first ? m_state.position : sensedBefore);
+    input.dt = m_servoPeriod;
+    input.time = t;
+    fault = renderChecked(input);
+    force = input.force.norm();
+    m_staleTicks = 0;
+    m_heldEfforts = m_efforts;
+  } else {
+    // A stalled application: its last force no longer belongs to where the device is. End the
+    // contact and ramp the last efforts down (no step for the user's hand).
+    if (m_staleTicks == 0) readingLost();
+    ++m_staleTicks;
+    const double scale = std::max(0.0, 1.0 - static_cast<double>(m_staleTicks) / kStaleRampPeriods);
+    for (int i = 0; i < m_actuators; ++i) m_efforts[i] = scale * m_heldEfforts[i];
   }
+  std::copy(m_efforts.begin(), m_efforts.begin() + m_actuators, a_efforts);
+  pushHandLocked(t);
+  m_lastFault = fault;
+  ++m_ticks;
+  recordTickLocked(force, fault);
+  publishStateLocked();
+}
+
+void cUhapticsDevice::servoNoReading(const uhaptics::DeviceSnapshot& a_snapshot) noexcept {
+  if (!m_servoArmed.load(std::memory_order_acquire)) return;
+  std::lock_guard<std::mutex> lock(m_mutex);
+  if (!m_servoArmed.load(std::memory_order_relaxed)) return;
+  const bool linkDown = a_snapshot.link != uhaptics::LinkState::kRunning || a_snapshot.host_watchdog_tripped;
+  if (!linkDown) return;  // one late STATE: the loop holds the previous command
+  switch (a_snapshot.link) {
+    case uhaptics::LinkState::kConnecting: m_linkStatus = uhaptics::LinkStatus::kConnecting; break;
+    case uhaptics::LinkState::kDisconnected: m_linkStatus = uhaptics::LinkStatus::kDisconnected; break;
+    case uhaptics::LinkState::kStopped: m_linkStatus = uhaptics::LinkStatus::kStopped; break;
+    case uhaptics::LinkState::kRunning: m_linkStatus = uhaptics::LinkStatus::kHostWatchdog; break;
+  }
+  m_stats.recordReading(false);
+  readingLost();
+  m_efforts.fill(0.0);
+  m_heldEfforts.fill(0.0);
+  m_servoFirst = true;  // rates start again from the next reading
+  m_lastFault = uhaptics::Fault::kDeviceError;
+  ++m_ticks;
+  recordTickLocked(0.0, m_lastFault);
+  publishStateLocked();
+}
+
+void cUhapticsDevice::publishStateLocked() noexcept {
+  PublishedState p;
+  for (int i = 0; i < 3; ++i) {
+    p.position[i] = m_state.position(i);
+    p.linearVelocity[i] = m_state.linearVelocity(i);
+    p.angularVelocity[i] = m_state.angularVelocity(i);
+    for (int j = 0; j < 3; ++j) p.rotation[3 * i + j] = m_state.rotation(i, j);
+  }
+  for (int i = 0; i < C_MAX_DOF; ++i) p.joints[i] = i < m_state.joints.size() ? m_state.joints(i) : 0.0;
+  p.ticks = m_ticks;
+  p.link = m_linkStatus;
+  p.fault = m_lastFault;
+  p.sensed = !m_servoFirst || m_ticks > 0;
+  m_stateExchange.write(p);
+}
+
+void cUhapticsDevice::pullStateLocked() noexcept {
+  if (!m_stateExchange.read(m_published) || !m_published.sensed) return;
+  const PublishedState& p = m_published;
+  m_appState.position = uhaptics::Vec3(p.position[0], p.position[1], p.position[2]);
+  m_appState.linearVelocity = uhaptics::Vec3(p.linearVelocity[0], p.linearVelocity[1], p.linearVelocity[2]);
+  m_appState.angularVelocity = uhaptics::Vec3(p.angularVelocity[0], p.angularVelocity[1], p.angularVelocity[2]);
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j) m_appState.rotation(i, j) = p.rotation[3 * i + j];
+  m_appState.joints.resize(m_joints);
+  for (int i = 0; i < m_joints; ++i) m_appState.joints(i) = p.joints[i];
+}
+
+std::unique_lock<std::mutex> cUhapticsDevice::lockApplication(bool a_advance) {
+  if (m_servoThreadRenders) {
+    std::unique_lock<std::mutex> lock(m_appMutex);
+    pullStateLocked();
+    return lock;
+  }
+  std::unique_lock<std::mutex> lock(m_mutex);
+  if (a_advance && !m_lockStep) advanceLocked(false);  // a read-only application still sees the hand move it
+  return lock;
 }
 
 void cUhapticsDevice::advanceLocked(bool a_oneTick) noexcept {
@@ -293,44 +490,50 @@ void cUhapticsDevice::advanceLocked(bool a_oneTick) noexcept {
   for (std::uint64_t i = 0; i < missing; ++i) tickLocked();
 }
 
+const cUhapticsDevice::State& cUhapticsDevice::applicationState() const noexcept {
+  // Before the first reading of a session (and while closed) the subclass's resting state.
+  return m_servoThreadRenders && m_published.sensed ? m_appState : m_state;
+}
+
 bool cUhapticsDevice::getPosition(cVector3d& a_position) {
-  std::lock_guard<std::mutex> lock(m_mutex);
-  if (!m_lockStep) advanceLocked(false);  // a read-only application still sees the hand move it
-  a_position = toChai(m_state.position);
-  m_linearVelocity = toChai(m_state.linearVelocity);  // the state knows it: no finite-difference estimate
+  const auto lock = lockApplication(true);
+  const State& state = applicationState();
+  a_position = toChai(state.position);
+  m_linearVelocity = toChai(state.linearVelocity);  // the state knows it: no finite-difference estimate
   return m_deviceReady;
 }
 
 bool cUhapticsDevice::getRotation(cMatrix3d& a_rotation) {
-  std::lock_guard<std::mutex> lock(m_mutex);
-  const uhaptics::Mat3& r = m_state.rotation;
+  const auto lock = lockApplication(false);
+  const uhaptics::Mat3& r = applicationState().rotation;
   a_rotation.set(r(0, 0), r(0, 1), r(0, 2), r(1, 0), r(1, 1), r(1, 2), r(2, 0), r(2, 1), r(2, 2));
-  m_angularVelocity = toChai(m_state.angularVelocity);
+  m_angularVelocity = toChai(applicationState().angularVelocity);
   return m_deviceReady;
 }
 
 bool cUhapticsDevice::getLinearVelocity(cVector3d& a_linearVelocity) {
-  std::lock_guard<std::mutex> lock(m_mutex);
-  a_linearVelocity = m_linearVelocity = toChai(m_state.linearVelocity);
+  const auto lock = lockApplication(false);
+  a_linearVelocity = m_linearVelocity = toChai(applicationState().linearVelocity);
   return m_deviceReady;
 }
 
 bool cUhapticsDevice::getAngularVelocity(cVector3d& a_angularVelocity) {
-  std::lock_guard<std::mutex> lock(m_mutex);
-  a_angularVelocity = m_angularVelocity = toChai(m_state.angularVelocity);
+  const auto lock = lockApplication(false);
+  a_angularVelocity = m_angularVelocity = toChai(applicationState().angularVelocity);
   return m_deviceReady;
 }
 
 bool cUhapticsDevice::getVelocities(cVector3d& a_linearVelocity, cVector3d& a_angularVelocity) {
-  std::lock_guard<std::mutex> lock(m_mutex);
-  a_linearVelocity = m_linearVelocity = toChai(m_state.linearVelocity);
-  a_angularVelocity = m_angularVelocity = toChai(m_state.angularVelocity);
+  const auto lock = lockApplication(false);
+  a_linearVelocity = m_linearVelocity = toChai(applicationState().linearVelocity);
+  a_angularVelocity = m_angularVelocity = toChai(applicationState().angularVelocity);
   return m_deviceReady;
 }
 
 bool cUhapticsDevice::getJointAnglesRad(double a_jointAnglesRad[C_MAX_DOF]) {
-  std::lock_guard<std::mutex> lock(m_mutex);
-  for (int i = 0; i < C_MAX_DOF; ++i) a_jointAnglesRad[i] = i < m_state.joints.size() ? m_state.joints(i) : 0.0;
+  const auto lock = lockApplication(false);
+  const State& state = applicationState();
+  for (int i = 0; i < C_MAX_DOF; ++i) a_jointAnglesRad[i] = i < state.joints.size() ? state.joints(i) : 0.0;
   return m_deviceReady;
 }
 
@@ -351,27 +554,41 @@ bool cUhapticsDevice::getUserSwitches(unsigned int& a_userSwitches) {
 
 bool cUhapticsDevice::setForceAndTorqueAndGripperForce(const cVector3d& a_force, const cVector3d& a_torque,
                                                        double a_gripperForce) {
-  std::lock_guard<std::mutex> lock(m_mutex);
+  auto lock = lockApplication(false);
   if (!m_deviceReady) return C_ERROR;
   m_commandForce = toEigen(a_force);
   m_commandTorque = toEigen(a_torque);
-  if (!m_commandForce.allFinite() || !m_commandTorque.allFinite()) {
+  const bool finite = m_commandForce.allFinite() && m_commandTorque.allFinite();
+  if (!finite) {
     // A broken scene must not move the device: zero command; the device reports the fault.
     m_commandForce.setZero();
     m_commandTorque.setZero();
-    m_lastFault = uhaptics::Fault::kNonFiniteInput;
+    if (!m_servoThreadRenders) m_lastFault = uhaptics::Fault::kNonFiniteInput;
     m_stats.recordFault();
-    return C_ERROR;
   }
   m_prevForce = a_force;
   m_prevTorque = a_torque;
   m_prevGripperForce = a_gripperForce;
-  advanceLocked(m_lockStep);
-  return m_deviceReady;
+  if (m_servoThreadRenders) {
+    // The servo thread renders it on its next period; the stamp says how fresh it is.
+    ContactInput input;
+    const bool send = m_forcesEnabled;
+    for (int i = 0; i < 3; ++i) {
+      input.force[i] = send ? m_commandForce(i) : 0.0;
+      input.torque[i] = send ? m_commandTorque(i) : 0.0;
+      input.seen[i] = applicationState().position(i);
+    }
+    input.stampNs = steadyNs();
+    input.sequence = ++m_inputSequence;
+    m_inputExchange.write(input);
+  } else if (finite) {
+    advanceLocked(m_lockStep);
+  }
+  return finite ? m_deviceReady : C_ERROR;
 }
 
 bool cUhapticsDevice::enableForces(bool a_value) {
-  std::lock_guard<std::mutex> lock(m_mutex);
+  const auto lock = lockApplication(false);
   m_forcesEnabled = a_value;
   return C_SUCCESS;
 }

@@ -98,7 +98,8 @@ DeviceSelection readDeviceSelection(const std::vector<std::string>& devices,
     throw Error("no device selected: set UHAPTICS_DEVICE to one of: " + joined(devices) +
                 " (or name it in the UHAPTICS_CONFIG file under selection/device)");
   }
-  if (selection.backend != "sim") selection.hand_enabled = false;  // a real user holds real hardware
+  // A real user holds real hardware; the scripted hand moves the simulated and the emulated device.
+  if (selection.backend == "usb") selection.hand_enabled = false;
   return selection;
 }
 

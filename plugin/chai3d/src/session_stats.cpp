@@ -21,6 +21,9 @@ void SessionStats::start(double wall_time) noexcept {
   link_down_ = false;
   ticks_without_reading_.store(0);
   link_losses_.store(0);
+  stale_input_ticks_.store(0);
+  stale_input_episodes_.store(0);
+  input_stale_ = false;
   link_recoveries_.store(0);
   peak_force_.store(0.0);
   peak_output_.store(0.0);
@@ -38,6 +41,15 @@ void SessionStats::recordReading(bool have_reading) noexcept {
     bump(link_recoveries_);
   }
   link_down_ = !have_reading;
+}
+
+void SessionStats::recordInput(bool stale) noexcept {
+  if (stale) {
+    stale_input_ticks_.store(stale_input_ticks_.load(std::memory_order_relaxed) + 1, std::memory_order_relaxed);
+    if (!input_stale_)
+      stale_input_episodes_.store(stale_input_episodes_.load(std::memory_order_relaxed) + 1, std::memory_order_relaxed);
+  }
+  input_stale_ = stale;
 }
 
 void SessionStats::recordPosition(double x, double y, double z) noexcept {
@@ -124,6 +136,8 @@ SessionStatsSnapshot SessionStats::snapshot(double wall_time) const noexcept {
   s.in_contact = in_contact_now_.load();
   s.ticks_without_reading = ticks_without_reading_.load();
   s.link_losses = link_losses_.load();
+  s.stale_input_ticks = stale_input_ticks_.load();
+  s.stale_input_episodes = stale_input_episodes_.load();
   s.link_recoveries = link_recoveries_.load();
   if (visited_any_.load(std::memory_order_acquire)) {
     for (std::size_t i = 0; i < 3; ++i) {
@@ -173,6 +187,8 @@ std::string formatStatsJson(const SessionStatsSnapshot& stats, const std::string
       << "  \"in_contact\": " << (stats.in_contact ? "true" : "false") << ",\n"
       << "  \"ticks_without_reading\": " << stats.ticks_without_reading << ",\n"
       << "  \"link_losses\": " << stats.link_losses << ",\n"
+      << "  \"stale_input_ticks\": " << stats.stale_input_ticks << ",\n"
+      << "  \"stale_input_episodes\": " << stats.stale_input_episodes << ",\n"
       << "  \"link_recoveries\": " << stats.link_recoveries << ",\n"
       << "  \"visited_min_radii\": [" << stats.visited_min[0] << ", " << stats.visited_min[1] << ", "
       << stats.visited_min[2] << "],\n"

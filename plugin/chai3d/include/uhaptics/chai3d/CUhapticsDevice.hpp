@@ -3,30 +3,43 @@
 //
 // CHAI3D hands the device a Cartesian force/torque in the device frame (x toward the operator, y to
 // the right, z up; N, N m) from whatever thread runs the application's haptic loop, at whatever
-// rate that loop spins. This class turns that into fixed-period servo ticks, each the same cycle on
+// rate that loop spins. The device renders it in fixed-period servo ticks, each the same cycle on
 // every backend over one joint I/O (uhaptics::JointIo):
 //
-//   read the joints -> sense() (kinematics, CHAI3D state) -> render() (efforts) -> command -> advance
+//   read the joints -> sense() (kinematics, CHAI3D state) -> render() (efforts) -> command
 //
-// It holds the last command between ticks as hardware does, drives the simulated backend's user
-// (the scripted hand), and keeps session statistics (optionally written to a file every half second
-// and on close, so even a killed process leaves a recent record).
+// sense() and render() are the device's rendering policy; where they run depends on the backend:
 //
-// Time: in real-time mode (default) the number of servo ticks follows the wall clock, whatever the
-// application's loop rate (at most kMaxCatchUpTicks per call: a stalled loop does not trigger a burst
-// of simulation). In lock-step mode every setForceAndTorqueAndGripperForce() call is exactly one
-// servo tick: deterministic, for tests.
+//  - "emulated" and "usb" (a board: the in-process emulator or the device's controller board): in
+//    the board's real-time servo thread, once per period, on that period's encoder reading (paper
+//    001 ran its controller at the device's servo rate on the device's own target). The
+//    application's haptic thread only publishes what the scene asks for (force, torque, the
+//    position it computed them from), time-stamped, and reads back the state; both through
+//    wait-free triple buffers, so neither thread waits for the other. Input older than the stale
+//    time (option "stale_time", default 60 ms; no setForce() since) is a fault like a lost link:
+//    readingLost() ends the contact (the TAU's LQR wall lets go), the efforts ramp linearly to zero
+//    over kStaleRampPeriods periods, the statistics count it, and rendering resumes with the next
+//    publication.
+//  - "sim" (default): the device's simulated plant (makeSimulatedPlant()) stepped by the
+//    application's calls. In real-time mode the number of ticks follows the wall clock, whatever
+//    the application's loop rate (at most kMaxCatchUpTicks per call: a stalled loop does not
+//    trigger a burst of simulation); in lock-step mode every setForceAndTorqueAndGripperForce()
+//    call is exactly one tick (deterministic, for tests).
 //
-// Backends: "sim" (default) is the device's simulated plant (makeSimulatedPlant()) stepped by each
-// tick, with the scripted hand as its user; the joints are read again right after the step, so the
-// application sees the state the tick produced. "emulated" and "usb" are the device's board (the
-// board's real-time servo loop in its own thread, its rate, wire protocol, watchdogs and safety
-// stage); each tick reads the newest sample. A tick without a reading (link down, host watchdog)
-// commands zero and reports kDeviceError.
+// On every backend the policy sees the joints as the sensors give them (the simulated encoders
+// quantize like the board's) and rates from one estimator (JointRateEstimator over the device's
+// sample clock): nothing the simulation knows beyond what a board reports. The scripted hand (the
+// simulated user) pushes the simulated plant on "sim" and the emulated board's plant on
+// "emulated", from the sensed state, each servo period.
+//
+// Statistics (session_stats.hpp): recorded by whichever thread ticks, optionally written to a file
+// every half second and on close, so even a killed process leaves a recent record.
 //
 // Subclasses implement only what differs between devices: their specification (in the
 // constructor), their simulated plant, how a joint reading becomes kinematics and CHAI3D state
-// (sense) and how to render (render). All hooks run with the device mutex held.
+// (sense) and how to render (render). All hooks run with the device mutex (deviceMutex()) held, in
+// the thread that ticks; subclass accessors that read rendering state take it too. The
+// application's hot path (getPosition(), setForce...()) never takes it on a board backend.
 #include <array>
 #include <atomic>
 #include <chrono>
@@ -41,6 +54,7 @@
 
 #include "uhaptics/backends/board_plant.hpp"
 #include "uhaptics/backends/joint_io.hpp"
+#include "uhaptics/backends/lockfree.hpp"
 #include "uhaptics/chai3d/device_selection.hpp"
 #include "uhaptics/backends/scripted_hand.hpp"
 #include "uhaptics/chai3d/session_stats.hpp"
@@ -55,6 +69,9 @@ typedef std::shared_ptr<cUhapticsDevice> cUhapticsDevicePtr;
 class cUhapticsDevice : public cGenericHapticDevice {
  public:
   static constexpr int kMaxCatchUpTicks = 50;
+  /// Board backends: periods over which the efforts ramp to zero once the application's input is
+  /// stale (10 ms at 1 kHz).
+  static constexpr int kStaleRampPeriods = 10;
 
   virtual ~cUhapticsDevice();
   cUhapticsDevice(const cUhapticsDevice&) = delete;
@@ -83,12 +100,14 @@ class cUhapticsDevice : public cGenericHapticDevice {
 
   // ---- uhaptics extras ----------------------------------------------------------------------
   /// Lock-step: each setForceAndTorqueAndGripperForce() call is one servo tick (deterministic).
+  /// sim only: a board's servo thread keeps its own clock.
   void setLockStep(bool a_lockStep);
   bool getLockStep() const { return m_lockStep; }
   double getServoPeriod() const { return m_servoPeriod; }
   /// Simulated time [s] = servo ticks x period.
   double getSimulationTime();
-  /// Replaces the scripted hand (throws uhaptics::Error on invalid options); sim backend only.
+  /// Replaces the scripted hand (throws uhaptics::Error on invalid options); sim and emulated, while
+  /// closed on emulated (the servo thread owns it while open).
   void setScriptedHand(const uhaptics::ScriptedHandOptions& a_options);
   void setScriptedHandEnabled(bool a_enabled);
   bool getScriptedHandEnabled() const { return m_handEnabled; }
@@ -109,6 +128,14 @@ class cUhapticsDevice : public cGenericHapticDevice {
   uhaptics::ServoLoop* getServoLoop();
   /// Name of the rendering method now in use (may change at run time, e.g. TAU's wall).
   virtual std::string getRendererName() const = 0;
+  /// Whether sense() and render() run in the board's servo thread (emulated, usb) rather than in
+  /// the application's calls (sim).
+  bool rendersInServoThread() const { return m_servoThreadRenders; }
+  /// Board backends: how long the application's input may go unpublished before the efforts ramp
+  /// to zero [s] (option "stale_time", 0.001..1, default 0.06: longer than the 50 ms a stock Linux
+  /// kernel suspends a busy SCHED_FIFO thread such as CHAI3D's haptic loop every second,
+  /// sched_rt_runtime_us = 950000 of 1000000, which is no stall of the application).
+  double getStaleTime() const { return m_staleTime; }
 
  protected:
   /// a_servoPeriod [s]: the device's control period (its board's rate). a_joints, a_actuators: what
@@ -134,14 +161,15 @@ class cUhapticsDevice : public cGenericHapticDevice {
   virtual void resetRendering() = 0;
   /// One joint reading (a_joints values each).
   struct JointReading {
-    const double* positions;  // as the sensors give them: what the renderer works from
-    const double* rates;      // exact from a simulation, else the positions' differences over the
-                              // device's sample clock (zero on the session's first reading)
-    const double* actual;     // a simulation's positions without sensor error, else `positions`
+    const double* positions;  // as the sensors give them (encoder counts times their resolution)
+    const double* rates;      // JointRateEstimator over the device's sample clock (zero on the
+                              // session's first reading)
+    /// A simulation's positions without sensor error (sim only), else `positions`. Only the TAU's
+    /// scene on sim still reads it, until its contact classifier tolerates quantization.
+    const double* actual;
     bool first;               // the session's first reading
   };
-  /// Update what render() needs and m_state from a reading. The CHAI3D state may use `actual`: a
-  /// simulated device then shows the scene where it is, as the sim backends always have.
+  /// Update what render() needs and m_state from a reading: the scene sees what the sensors say.
   virtual void sense(const JointReading& a_reading) noexcept = 0;
   /// In open(), after the first sense(): throws uhaptics::Error when the device cannot start from
   /// that reading.
@@ -149,7 +177,8 @@ class cUhapticsDevice : public cGenericHapticDevice {
   /// One servo period from the last sense(): the actuator efforts for the application's force and
   /// torque. A returned fault (or a non-finite effort) sends zero instead.
   virtual uhaptics::Fault render(const ServoInput& a_input, double* a_efforts) noexcept = 0;
-  /// A period without a reading (link down, host watchdog): zero went out; end what assumes a
+  /// A period without a reading (link down, host watchdog) or without current input from the
+  /// application (board backends: stale input): render() was not called; end what assumes a
   /// continuous contact.
   virtual void readingLost() noexcept {}
   /// close(): the last command was zero; end the session's rendering state. Must not throw.
@@ -201,18 +230,54 @@ class cUhapticsDevice : public cGenericHapticDevice {
 
  private:
   using Clock = std::chrono::steady_clock;
+  class ServoBridge;
+  friend class ServoBridge;
+  /// Haptic thread -> servo thread (board backends): what the scene asks for, time-stamped.
+  struct ContactInput {
+    double force[3], torque[3], seen[3];
+    std::int64_t stampNs;     // steady clock
+    std::uint64_t sequence;   // 0: nothing published yet this session
+  };
+  /// Servo thread -> application (board backends): the state after a tick.
+  struct PublishedState {
+    double position[3], rotation[9], linearVelocity[3], angularVelocity[3], joints[C_MAX_DOF];
+    std::uint64_t ticks;
+    uhaptics::LinkStatus link;
+    uhaptics::Fault fault;
+    bool sensed;  // a reading has been sensed this session
+  };
+
   void advanceLocked(bool a_oneTick) noexcept;
   void tickLocked() noexcept;
   /// Reads the joints and passes them to sense(); false (nothing sensed) when there is no reading.
   bool readJointsLocked(bool a_first) noexcept;
+  /// sense() on positions from the sensors (rates by the estimator; a_actual: see JointReading).
+  void senseLocked(const double* a_positions, const double* a_actual, std::uint32_t a_sampleUs, bool a_first) noexcept;
+  /// render() with the checks every backend applies: a fault or a non-finite effort sends zero.
+  uhaptics::Fault renderChecked(const ServoInput& a_input) noexcept;
+  /// The scripted hand's force on the simulated or emulated plant, from the sensed state.
+  void pushHandLocked(double a_time) noexcept;
+  void recordTickLocked(double a_force, uhaptics::Fault a_fault) noexcept;
   void commandZeroLocked() noexcept;
+  // Board backends, servo thread.
+  void servoTick(const uhaptics::DeviceSnapshot& a_snapshot, double* a_efforts) noexcept;
+  void servoNoReading(const uhaptics::DeviceSnapshot& a_snapshot) noexcept;
+  void publishStateLocked() noexcept;
+  // Board backends, application side (m_appMutex held): the newest published state.
+  void pullStateLocked() noexcept;
+  /// The state the application reads, with the lock that guards it: m_mutex on sim (after
+  /// advancing the simulation when a_advance), m_appMutex on a board.
+  std::unique_lock<std::mutex> lockApplication(bool a_advance);
+  const State& applicationState() const noexcept;
   double wallTime() const noexcept;
   void startStatsWriter();
   void stopStatsWriter() noexcept;
   void writeStats(const std::string& a_path) noexcept;
 
-  std::mutex m_mutex;  // the application may call from its haptic and its graphics threads
+  std::mutex m_mutex;  // the policy's: held by the thread that ticks and by subclass accessors
   const double m_servoPeriod;
+  const bool m_servoThreadRenders;  // emulated, usb
+  const double m_staleTime;         // [s]
   bool m_lockStep = false;
   bool m_forcesEnabled = true;
   bool m_handEnabled;
@@ -220,7 +285,7 @@ class cUhapticsDevice : public cGenericHapticDevice {
   const int m_joints, m_actuators;
   std::unique_ptr<uhaptics::JointIo> m_io;  // every backend; opened in open(), closed in close()
   std::array<double, uhaptics::wire::kMaxChannels> m_positions{}, m_rates{}, m_actual{}, m_efforts{};
-  uhaptics::JointRateEstimator m_rateEstimator;  // rates for backends that do not know them
+  uhaptics::JointRateEstimator m_rateEstimator;  // every backend's rates
   bool m_sensedAfterAdvance = false;  // sim: the joints were read right after the last step
   uhaptics::Vec3 m_commandForce = uhaptics::Vec3::Zero();
   uhaptics::Vec3 m_commandTorque = uhaptics::Vec3::Zero();
@@ -234,6 +299,20 @@ class cUhapticsDevice : public cGenericHapticDevice {
   std::mutex m_writerMutex;
   std::condition_variable m_writerWake;
   bool m_writerStop = false;
+
+  // Board backends: the exchange between the application's threads and the servo thread.
+  std::unique_ptr<ServoBridge> m_bridge;      // the ServoRenderer the board's servo loop runs
+  std::atomic<bool> m_servoArmed{false};      // open() has reset the policy: the servo thread renders
+  bool m_servoFirst = true;                   // servo thread: the next reading is the session's first
+  ContactInput m_servoInput{};                // servo thread: the newest input it has read
+  int m_staleTicks = 0;                       // servo thread: consecutive periods of stale input
+  std::array<double, uhaptics::wire::kMaxChannels> m_heldEfforts{};  // the last rendered efforts
+  uhaptics::TripleBuffer<ContactInput> m_inputExchange;
+  uhaptics::TripleBuffer<PublishedState> m_stateExchange;
+  std::mutex m_appMutex;                      // the application's threads among themselves
+  State m_appState;                           // what the application reads (board backends)
+  PublishedState m_published{};               // the newest publication read (m_appMutex)
+  std::uint64_t m_inputSequence = 0;          // m_appMutex
 };
 
 }  // namespace chai3d

@@ -35,6 +35,10 @@ struct SessionStatsSnapshot {
   std::uint64_t ticks_without_reading = 0;
   std::uint64_t link_losses = 0;
   std::uint64_t link_recoveries = 0;
+  /// Board backends: servo ticks whose application input was stale (the efforts ramped to zero),
+  /// and the episodes of them (the application's haptic thread stalled, or stopped sending).
+  std::uint64_t stale_input_ticks = 0;
+  std::uint64_t stale_input_episodes = 0;
   /// Box of the positions the device visited, in workspace radii around the workspace centre (what
   /// CHAI3D maps to world units when a tool's workspace radius is 1); empty (min > max) before a tick.
   std::array<double, 3> visited_min{{1.0, 1.0, 1.0}}, visited_max{{-1.0, -1.0, -1.0}};
@@ -57,6 +61,8 @@ class SessionStats {
   void recordTick(double commanded_force, double output_magnitude, bool fault) noexcept;
   /// Whether this tick had a joint reading (servo thread, once per tick).
   void recordReading(bool have_reading) noexcept;
+  /// Whether this tick's application input was stale (servo thread, once per tick with a reading).
+  void recordInput(bool stale) noexcept;
   /// Where the device is after a tick, in workspace radii (non-finite values are ignored).
   void recordPosition(double x, double y, double z) noexcept;
   /// A command refused before any tick (e.g. non-finite): counted as a fault, not as a tick.
@@ -82,6 +88,8 @@ class SessionStats {
   std::atomic<std::uint64_t> faults_{0};
   bool link_down_ = false;  // servo thread only
   std::atomic<std::uint64_t> ticks_without_reading_{0}, link_losses_{0}, link_recoveries_{0};
+  bool input_stale_ = false;  // servo thread only
+  std::atomic<std::uint64_t> stale_input_ticks_{0}, stale_input_episodes_{0};
   std::atomic<double> peak_force_{0.0};
   std::atomic<double> peak_output_{0.0};
   std::array<std::atomic<double>, 3> visited_min_{}, visited_max_{};
