@@ -5,8 +5,11 @@ rendering method did its work in that scene (examples.json gives the scenes and 
 each device's devices/<folder>/chai3d/dropin.json what it must show in each scene).
 
   run_examples.py --bin DIR [--example NAME ...] [--device NAME ...] [--backend sim|emulated]
-                  [--out DIR] [--screenshots] [--report]
+                  [--option DEVICE/NAME=VALUE ...] [--out DIR] [--screenshots] [--report]
   run_examples.py --bin DIR --example NAME --reject     (an invalid selection must be refused)
+  run_examples.py ... --method-off                      (the device's dropin.json "method_off" options
+                                                         switch its paper's method off: the scene's rule
+                                                         must fail, the run otherwise hold)
 
 Each run: the example starts with UHAPTICS_DEVICE, UHAPTICS_STATS and UHAPTICS_CONFIG (the
 scripted hand's path for that scene) in its environment and is ended after its time (the examples
@@ -101,16 +104,42 @@ def read_stats(path):
 
 
 def scene_rules(table, example, device):
-    """The device's entry for this example (expect, why, hand), empty for a device without rules."""
-    return table["devices"].get(device, {}).get("scenes", {}).get(example["name"], {})
+    """The device's entry for this example (expect, why, hand), empty for a device without rules; an
+    entry under the backend's name (e.g. "emulated") overrides it on that backend."""
+    rules = dict(table["devices"].get(device, {}).get("scenes", {}).get(example["name"], {}))
+    rules.update(rules.pop(ARGS.backend, {}) if "ARGS" in globals() else {})
+    for backend in ("sim", "emulated", "usb"):
+        rules.pop(backend, None)
+    return rules
+
+
+def parse_options(items):
+    """--option DEVICE/NAME=VALUE -> {device: {name: value}} (the config's "options")."""
+    options = {}
+    for item in items or []:
+        key, sep, value = item.partition("=")
+        device, slash, name = key.partition("/")
+        if not sep or not slash or not device or not name:
+            raise SystemExit(f"run_examples.py: --option {item!r}: expected DEVICE/NAME=VALUE")
+        options.setdefault(device, {})[name] = float(value)
+    return options
 
 
 def hand_config(table, example, device):
-    """The UHAPTICS_CONFIG file content: the scripted hand's path for this scene and device."""
+    """The UHAPTICS_CONFIG file content: the scripted hand's path for this scene and device, and
+    the device options given with --option."""
     hand = dict(example.get("hand", {}))
     hand.update(scene_rules(table, example, device).get("hand", {}))
     waypoints = hand.pop("waypoints", None)
     config = {"device": "chai3d-selection", "format_version": 1, "hand": hand}
+    options = parse_options(ARGS.option)
+    if ARGS.method_off:
+        off = table["devices"][device].get("method_off")
+        if not off:
+            raise SystemExit(f"run_examples.py: {device}'s dropin.json has no \"method_off\" options")
+        options.setdefault(device, {}).update(off)
+    if options:
+        config["options"] = options
     if waypoints is not None:
         config["hand"]["waypoint_count"] = len(waypoints)
         config["hand"]["waypoints"] = [c for point in waypoints for c in point]
@@ -118,8 +147,13 @@ def hand_config(table, example, device):
 
 
 def figure(stats, name):
-    value = stats.get("renderer_figures", {}).get(name)
-    return float(value) if value is not None else math.nan
+    """A renderer figure or a session statistic by name; "a/b" is their ratio (e.g. the share of
+    the contact ticks the LQR wall held: lqr_held_ticks/contact_ticks)."""
+    if "/" in name:
+        top, bottom = (figure(stats, part) for part in name.split("/", 1))
+        return top / bottom if bottom > 0 else math.nan
+    value = stats.get("renderer_figures", {}).get(name, stats.get(name))
+    return float(value) if isinstance(value, (int, float)) else math.nan
 
 
 def check(table, example, device, stats, backend):
@@ -163,7 +197,7 @@ def check(table, example, device, stats, backend):
 
 def run_one(table, example, device, backend, display, out, screenshots, reject=False):
     name = example["name"]
-    tag = f"{name}-{device}" + ("" if backend == "sim" else f"-{backend}")
+    tag = f"{name}-{device}" + ("" if backend == "sim" else f"-{backend}") + ("-method-off" if ARGS.method_off else "")
     stats_path = os.path.join(out, tag + ".json")
     config_path = os.path.join(out, tag + ".config.json")
     shot_path = os.path.join(out, tag + ".png")
@@ -224,6 +258,14 @@ def run_one(table, example, device, backend, display, out, screenshots, reject=F
                 "problems": problems, "stats": None, "shot": None, "log": output}
     stats = read_stats(stats_path)
     problems, expectation = check(table, example, device, stats, backend)
+    if ARGS.method_off:
+        # The method is off: the run must still be a valid session that touched the scene, and its
+        # rule must fail (otherwise the rule does not measure the method).
+        rule_misses = [p for p in problems if "expected" in p]
+        others = [p for p in problems if "expected" not in p]
+        problems = others if others else ([] if rule_misses else
+                                           [f"the rule '{expectation}' held with the method off: it does not measure the method"])
+        expectation = "counterfactual: " + expectation + (" fails (" + "; ".join(rule_misses) + ")" if rule_misses else "")
     if ended_early is not None:
         problems.insert(0, f"the example ended with {ended_early} before its {seconds:.0f} s")
     return {"example": name, "device": device, "backend": backend, "expect": expectation,
@@ -325,6 +367,10 @@ def main():
     parser.add_argument("--report", action="store_true")
     parser.add_argument("--reject", action="store_true", help="expect the selection to be refused")
     parser.add_argument("--seconds", type=float, help="run time of each example (default: the table's)")
+    parser.add_argument("--option", action="append", help="a device option DEVICE/NAME=VALUE (repeatable)")
+    parser.add_argument("--method-off", action="store_true",
+                        help="the device's method switched off (its dropin.json \"method_off\" options): "
+                             "its scene rule must fail")
     global ARGS
     ARGS = parser.parse_args()
     ARGS.bin = os.path.abspath(ARGS.bin)
