@@ -3,10 +3,12 @@
 // message and leaves nothing running.
 #include <catch2/catch.hpp>
 
+#include <algorithm>
 #include <array>
 #include <chrono>
 #include <cmath>
 #include <deque>
+#include <functional>
 #include <iostream>
 #include <thread>
 
@@ -189,6 +191,66 @@ TEST_CASE("joint rate estimator: device-clock differences, repeated samples held
   wrap.reset();
   wrap.update(p, 1, 5000, pd);
   CHECK(pd[0] == 0.0);
+}
+
+TEST_CASE("joint rate estimator: quantized encoders, the adaptive window against the plain difference",
+          "[servo][jointio]") {
+  // The TAU's encoders (4096 counts per turn, truncated as the simulation and a counter do), 1 kHz.
+  const double step = 2.0 * M_PI / 4096.0, dt = 1e-3;
+  struct Errors {
+    double rms = 0.0, worst = 0.0;
+  };
+  // RMS and worst rate error over 2 s of a joint moving as q(t), after the first 50 ms.
+  const auto run = [&](double resolution, const std::function<double(double)>& q, const std::function<double(double)>& qd) {
+    JointRateEstimator rate;
+    rate.setResolution(&resolution, 1);
+    Errors e;
+    int n = 0;
+    for (int k = 0; k < 2000; ++k) {
+      const double t = k * dt;
+      const double reading = std::floor(q(t) / step) * step;
+      double estimate = 0.0;
+      rate.update(&reading, 1, static_cast<std::uint32_t>(1000 * k), &estimate);
+      if (k < 50) continue;
+      const double error = estimate - qd(t);
+      e.rms += error * error;
+      e.worst = std::max(e.worst, std::abs(error));
+      ++n;
+    }
+    e.rms = std::sqrt(e.rms / n);
+    return e;
+  };
+  // Slow: 0.3 rad/s, a count every 5 ms. The plain difference reads 0 or 1.53 rad/s.
+  const auto ramp = [](double t) { return 0.1 + 0.3 * t; };
+  const auto ramp_rate = [](double) { return 0.3; };
+  const Errors plain_slow = run(0.0, ramp, ramp_rate);
+  const Errors foaw_slow = run(step, ramp, ramp_rate);
+  INFO("slow ramp: plain rms " << plain_slow.rms << ", adaptive rms " << foaw_slow.rms << " worst " << foaw_slow.worst);
+  CHECK(plain_slow.worst > 1.0);
+  // Bound: one count over the longest window (the end points' truncation errors differ by < step).
+  CHECK(foaw_slow.worst <= step / (JointRateEstimator::kMaxWindow * dt) * 1.5);
+  // Fast: 0.2 rad at 5 Hz (peak 6.3 rad/s): short windows, little lag.
+  const double w = 2.0 * M_PI * 5.0;
+  const auto sine = [w](double t) { return 0.2 * std::sin(w * t); };
+  const auto sine_rate = [w](double t) { return 0.2 * w * std::cos(w * t); };
+  const Errors plain_fast = run(0.0, sine, sine_rate);
+  const Errors foaw_fast = run(step, sine, sine_rate);
+  INFO("5 Hz sine: plain rms " << plain_fast.rms << ", adaptive rms " << foaw_fast.rms << " worst " << foaw_fast.worst);
+  CHECK(foaw_fast.rms < plain_fast.rms);
+  // The price of the window is lag: a window fits while its curvature a (wT)^2 / 8 stays within one
+  // count, and its secant is the rate at its middle, (wT) / 2 back: at most a sqrt(8 step / a) / 2.
+  const double a = 0.2 * w * w;
+  CHECK(foaw_fast.worst <= 1.25 * a * std::sqrt(8.0 * step / a) / 2.0);
+  // A stop: the estimate falls to zero within the longest window.
+  JointRateEstimator rate;
+  rate.setResolution(&step, 1);
+  double estimate = 0.0;
+  for (int k = 0; k < 100; ++k) {
+    const double t = k * dt;
+    const double reading = std::floor(ramp(std::min(t, 0.05)) / step) * step;  // stops at 50 ms
+    rate.update(&reading, 1, static_cast<std::uint32_t>(1000 * k), &estimate);
+  }
+  CHECK(std::abs(estimate) <= step / (JointRateEstimator::kMaxWindow * dt));
 }
 
 TEST_CASE("joint I/O, sim: the sample time is the simulated time", "[servo][jointio]") {

@@ -263,6 +263,11 @@ void BoardEmulator::setUserForce(const Vec3& force) noexcept {
   plant_.setUserForce(force);
 }
 
+bool BoardEmulator::readUserPoint(Vec3& position, Vec3& velocity) noexcept {
+  const std::lock_guard<std::mutex> lock(mutex_);
+  return plant_.readUserPoint(position, velocity);
+}
+
 BoardEmulator::Snapshot BoardEmulator::snapshot() const noexcept {
   const std::lock_guard<std::mutex> lock(mutex_);
   Snapshot s;

@@ -60,6 +60,9 @@ class SimJointIo final : public JointIo {
   }
   bool movesOnlyInAdvance() const noexcept override { return true; }
   bool readActual(double* positions) noexcept override { return plant_ && plant_->readActualJoints(positions); }
+  bool readUserPoint(Vec3& position, Vec3& velocity) noexcept override {
+    return plant_ && plant_->readUserPoint(position, velocity);
+  }
   void setUserForce(const Vec3& force) noexcept override {
     if (plant_) plant_->setUserForce(force);
   }
@@ -141,6 +144,9 @@ class ServoJointIo final : public JointIo {
     loop_->request(r);  // the servo loop's safety stage checks it before it leaves the host
   }
   Fault advance(double) noexcept override { return Fault::kNone; }
+  bool readUserPoint(Vec3& position, Vec3& velocity) noexcept override {
+    return emulator_ != nullptr && emulator_->readUserPoint(position, velocity);
+  }
   void setUserForce(const Vec3& force) noexcept override {
     if (emulator_ != nullptr) emulator_->setUserForce(force);
   }
@@ -178,18 +184,50 @@ class ServoJointIo final : public JointIo {
 
 }  // namespace
 
+void JointRateEstimator::setResolution(const double* steps, int n) noexcept {
+  resolution_.fill(0.0);
+  n = std::clamp(n, 0, wire::kMaxChannels);
+  for (int i = 0; i < n; ++i) resolution_[i] = std::isfinite(steps[i]) && steps[i] > 0.0 ? steps[i] : 0.0;
+}
+
 void JointRateEstimator::update(const double* positions, int n, std::uint32_t sample_us, double* rates) noexcept {
   n = std::clamp(n, 0, wire::kMaxChannels);
-  if (have_previous_ && sample_us != previous_us_) {
+  if (!have_previous_) {
+    rate_.fill(0.0);
+    elapsed_ = 0.0;
+    count_ = 0;
+  } else if (sample_us == previous_us_) {
+    std::copy(rate_.begin(), rate_.begin() + n, rates);  // no new sample: hold
+    return;
+  } else {
     // Unsigned difference: the elapsed time is right across the clock's wrap.
-    const double dt = 1e-6 * static_cast<double>(static_cast<std::uint32_t>(sample_us - previous_us_));
-    for (int i = 0; i < n; ++i) rate_[i] = (positions[i] - previous_[i]) / dt;
-  } else if (!have_previous_) {
-    std::fill(rate_.begin(), rate_.end(), 0.0);
+    elapsed_ += 1e-6 * static_cast<double>(static_cast<std::uint32_t>(sample_us - previous_us_));
   }
-  std::copy(positions, positions + n, previous_.begin());
+  head_ = (head_ + 1) % kHistory;
+  std::copy(positions, positions + n, history_[head_].begin());
+  time_[head_] = elapsed_;
+  count_ = std::min(count_ + 1, kHistory);
   previous_us_ = sample_us;
   have_previous_ = true;
+  const auto slot = [this](int back) { return (head_ + kHistory - back) % kHistory; };
+  for (int i = 0; i < n && count_ > 1; ++i) {
+    const double q = history_[head_][i];
+    const double d = resolution_[i];
+    // The longest window whose end-point line fits every sample inside it within d.
+    double slope = (q - history_[slot(1)][i]) / (elapsed_ - time_[slot(1)]);
+    for (int w = 2; d > 0.0 && w < count_; ++w) {
+      const int start = slot(w);
+      const double candidate = (q - history_[start][i]) / (elapsed_ - time_[start]);
+      bool fits = true;
+      for (int j = 1; j < w && fits; ++j) {
+        const int k = slot(j);
+        fits = std::abs(history_[k][i] - (q - candidate * (elapsed_ - time_[k]))) <= d;
+      }
+      if (!fits) break;
+      slope = candidate;
+    }
+    rate_[i] = slope;
+  }
   std::copy(rate_.begin(), rate_.begin() + n, rates);
 }
 

@@ -152,7 +152,15 @@ uhaptics::Fault cUhapticsDevice::renderChecked(const ServoInput& a_input) noexce
 
 void cUhapticsDevice::pushHandLocked(double a_time) noexcept {
   if (!m_handEnabled) return;
-  m_io->setUserForce(deviceToModelForce(m_hand->force(a_time, m_state.position, m_state.linearVelocity)));
+  // The hand holds the device as it is (a damper on an encoder-differenced velocity would lag);
+  // a plant without a point for it (its user is its own) is pushed from the sensed state.
+  uhaptics::Vec3 position = m_state.position, velocity = m_state.linearVelocity;
+  uhaptics::Vec3 modelPosition, modelVelocity;
+  if (m_io->readUserPoint(modelPosition, modelVelocity)) {
+    position = modelToDevicePoint(modelPosition);
+    velocity = modelToDeviceVector(modelVelocity);
+  }
+  m_io->setUserForce(deviceToModelForce(m_hand->force(a_time, position, velocity)));
 }
 
 void cUhapticsDevice::recordTickLocked(double a_force, uhaptics::Fault a_fault) noexcept {
@@ -180,6 +188,7 @@ bool cUhapticsDevice::open() {
                                                       uhaptics::Vec3::Zero());
     m_io = makeJointIo();
     m_servoArmed.store(false);  // a board's servo thread sends zero until the policy is reset
+    m_rateEstimator.setResolution(m_io->spec().position_resolution.data(), m_joints);
     m_io->open();  // throws with what to do: no board found (and what was), permission, version
     const uhaptics::DeviceDescriptor& d = m_io->spec().descriptor;
     if (d.joints != m_joints || d.actuators != m_actuators) {

@@ -21,6 +21,7 @@ DeviceDefinition definition() {
     requireSameRate(file, "usb/servo_rate_hz", spec.servo_rate_hz, 1.0 / model.servoPeriod());
     const Vec6 limits = model.effortLimits();
     spec.descriptor = DeviceDescriptor::fromParams(file, wire::DeviceType{self.wire_code}, self.title, 6, 6, limits.data());
+    for (int i = 0; i < 6; ++i) spec.position_resolution[i] = model.encoderResolution();
   };
   d.make_plant = [](const std::string& path) -> std::unique_ptr<BoardPlant> {
     return std::make_unique<TauBoardPlant>(TauModel::load(path), TauBoardPlant::Options{});

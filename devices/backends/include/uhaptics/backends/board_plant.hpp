@@ -33,6 +33,15 @@ class BoardPlant {
     (void)positions;
     return false;
   }
+  /// Where the simulated user holds the device: the end effector's position [m] and velocity [m/s]
+  /// in the device model's task frame (planar devices: x, y, 0) as they are, without sensor error:
+  /// a hand feels the device as it is, not as its encoders report it. False when the plant has no
+  /// such point for a caller's user (a position-driven user of its own).
+  virtual bool readUserPoint(Vec3& position, Vec3& velocity) noexcept {
+    (void)position;
+    (void)velocity;
+    return false;
+  }
   /// The force [N] of a user the caller simulates (a CHAI3D session's scripted hand) on the end
   /// effector, in the device model's task frame (planar devices: x, y), held until the next call.
   /// Only plants made without a user of their own take it; a position-driven user (the finger in

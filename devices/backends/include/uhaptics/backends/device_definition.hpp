@@ -4,6 +4,7 @@
 // devices (the protocol's device codes, the board catalog, the simulated plants, the servo tool,
 // the CHAI3D registry, the CMake list the drop-in tests run) is derived from those registrations.
 // docs/adding-a-device.md walks through adding one.
+#include <array>
 #include <cstdint>
 #include <memory>
 #include <string>
@@ -22,6 +23,10 @@ struct BoardSpec {
   double sample_rate_hz = 0.0;        // board sensor sampling
   std::uint32_t board_watchdog_us = 0;  // what the host configures with CONFIGURE
   std::string params_path;            // the file it came from
+  /// Per joint: the sensor's resolution, one quantization step [rad or m] (the TAU's encoders:
+  /// 2 pi / 4096); 0 for a sensor the simulation and the board treat as ideal. The rate estimator's
+  /// noise bound (JointRateEstimator::setResolution).
+  std::array<double, wire::kMaxChannels> position_resolution{};
 };
 
 /// The paper whose method the device reproduces, written once here: the reproduction rows name it by

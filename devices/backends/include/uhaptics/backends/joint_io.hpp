@@ -95,6 +95,13 @@ class JointIo {
     (void)positions;
     return false;
   }
+  /// sim and emulated: where a user the caller simulates holds the device, as it is
+  /// (BoardPlant::readUserPoint, model task frame); false for usb and plants without such a point.
+  virtual bool readUserPoint(Vec3& position, Vec3& velocity) noexcept {
+    (void)position;
+    (void)velocity;
+    return false;
+  }
   /// sim and emulated: the force [N] of a user the caller simulates on the end effector, in the
   /// device model's task frame (BoardPlant::setUserForce). usb: ignored (the user is a person).
   virtual void setUserForce(const Vec3& force) noexcept { (void)force; }
@@ -117,19 +124,38 @@ class JointIo {
   std::string backend_;
 };
 
-/// Joint rates from successive readings, the same on every backend: backward difference over the device's own sample clock
-/// (not the host's wake-up time, which jitters), correct across the 32-bit clock wrap. A repeated
-/// sample (same timestamp: the board has not sampled again yet) keeps the previous rate instead of
-/// reading as a stop. The first reading after reset() gives zero rates. No allocation.
+/// Joint rates from successive readings, the same on every backend, over the device's own sample
+/// clock (not the host's wake-up time, which jitters), correct across the 32-bit clock wrap.
+///
+/// A quantized sensor (the TAU's encoders: 1.5 mrad a count) differenced over one 1 ms sample reads
+/// 0 or 1.5 rad/s for a joint turning at 0.3 rad/s. With the sensor's resolution set
+/// (setResolution), each joint's rate is a first-order adaptive window (Janabi-Sharifi, Hayward and
+/// Chen, IEEE TCST 2000, end-fit FOAW): the slope of the longest window, up to kMaxWindow samples,
+/// whose line through its end points passes within one resolution step of every sample inside it.
+/// A fast joint gets a short window (little lag), a slow one a long window (little noise); a
+/// joint with resolution 0 (an ideal sensor) gets the plain backward difference. A repeated sample
+/// (same timestamp: the board has not sampled again yet) keeps the previous rate instead of reading
+/// as a stop. The first reading after reset() gives zero rates. No allocation.
 class JointRateEstimator {
  public:
-  void reset() noexcept { have_previous_ = false; }
+  static constexpr int kMaxWindow = 20;  // samples: 20 ms at 1 kHz
+  /// Per joint: the sensor's resolution (one quantization step) [rad or m]; 0: ideal. Keeps the history.
+  void setResolution(const double* steps, int n) noexcept;
+  void reset() noexcept {
+    have_previous_ = false;
+    count_ = 0;
+  }
   /// n <= wire::kMaxChannels positions sampled at sample_us; writes n rates [unit/s].
   void update(const double* positions, int n, std::uint32_t sample_us, double* rates) noexcept;
 
  private:
-  std::array<double, wire::kMaxChannels> previous_{};
+  static constexpr int kHistory = kMaxWindow + 1;
+  std::array<std::array<double, wire::kMaxChannels>, kHistory> history_{};  // positions, newest at head_
+  std::array<double, kHistory> time_{};  // [s] since the first reading, same slots
+  std::array<double, wire::kMaxChannels> resolution_{};
   std::array<double, wire::kMaxChannels> rate_{};
+  int head_ = 0, count_ = 0;
+  double elapsed_ = 0.0;
   std::uint32_t previous_us_ = 0;
   bool have_previous_ = false;
 };

@@ -39,6 +39,11 @@ class PlanarLinkagePlant final : public HeldTorquePlant<N> {
     const long n = clock_.take(dt);
     if (n > 0) fault_ = sim_.step(this->command_, static_cast<double>(n) * clock_.period());
   }
+  bool readUserPoint(Vec3& position, Vec3& velocity) noexcept override {
+    position << sim_.endEffectorPosition(), 0.0;
+    velocity << sim_.endEffectorVelocity(), 0.0;
+    return true;
+  }
   void setUserForce(const Vec3& force) noexcept override {
     load_.bias = force.template head<2>();
     sim_.setLoad(load_);

@@ -102,6 +102,12 @@ class cPlanarLinkageDevice : public cUhapticsDevice {
   virtual void sense(const JointReading& a_reading) noexcept;
   virtual uhaptics::Fault render(const ServoInput& a_input, double* a_efforts) noexcept;
   virtual uhaptics::Vec3 deviceToModelForce(const uhaptics::Vec3& a_force) const noexcept { return this->planarForce(a_force); }
+  virtual uhaptics::Vec3 modelToDevicePoint(const uhaptics::Vec3& a_point) const noexcept {
+    return this->planarToDevice(a_point.template head<2>() - m_centre);
+  }
+  virtual uhaptics::Vec3 modelToDeviceVector(const uhaptics::Vec3& a_vector) const noexcept {
+    return this->planarToDevice(a_vector.template head<2>());
+  }
 
  private:
   void updateState() noexcept;  // m_state from m_q, m_qd

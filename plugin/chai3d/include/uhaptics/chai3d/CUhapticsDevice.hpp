@@ -186,6 +186,11 @@ class cUhapticsDevice : public cGenericHapticDevice {
   /// The scripted hand's force (device frame) in the device model's task frame, for the simulated
   /// plant: unchanged by default; planar devices override it with planarForce().
   virtual uhaptics::Vec3 deviceToModelForce(const uhaptics::Vec3& a_force) const noexcept { return a_force; }
+  /// A point [m] and a vector of the device model's task frame in the device frame (where the
+  /// scripted hand holds the simulated plant): unchanged by default; the TAU shifts points by its
+  /// workspace centre, planar devices map with planarToDevice().
+  virtual uhaptics::Vec3 modelToDevicePoint(const uhaptics::Vec3& a_point) const noexcept { return a_point; }
+  virtual uhaptics::Vec3 modelToDeviceVector(const uhaptics::Vec3& a_vector) const noexcept { return a_vector; }
   /// The joint I/O of the selected backend: makeJointIo() of the registered device for emulated and
   /// usb, the simulated plant for sim. Test fixtures that are not registered devices override it.
   virtual std::unique_ptr<uhaptics::JointIo> makeJointIo();

@@ -32,6 +32,11 @@ class TauBoardPlant final : public HeldTorquePlant<6> {
     out = sim_.q();
     return true;
   }
+  bool readUserPoint(Vec3& position, Vec3& velocity) noexcept override {
+    position = sim_.pose().head<3>();
+    velocity = sim_.toolVelocity();
+    return true;
+  }
   void setUserForce(const Vec3& force) noexcept override { user_force_ = force; }
   Fault lastFault() const noexcept override { return fault_; }
 

@@ -96,6 +96,7 @@ class cTauDevice : public cUhapticsDevice {
   virtual uhaptics::Fault render(const ServoInput& a_input, double* a_efforts) noexcept;
   virtual void readingLost() noexcept;
   virtual void endSession() noexcept;
+  virtual uhaptics::Vec3 modelToDevicePoint(const uhaptics::Vec3& a_point) const noexcept { return a_point - m_centre; }
 
  private:
   void recordFigures(const uhaptics::TauContactClassifier::Events& a_events, const uhaptics::Vec3& a_force) noexcept;
