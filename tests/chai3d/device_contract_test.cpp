@@ -221,7 +221,9 @@ class CountingJointIo final : public uhaptics::JointIo {
   }
   uhaptics::Fault advance(double dt) noexcept override { return inner_->advance(dt); }
   bool movesOnlyInAdvance() const noexcept override { return inner_->movesOnlyInAdvance(); }
-  bool readActual(double* positions) noexcept override { return inner_->readActual(positions); }
+  bool readUserPoint(uhaptics::Vec3& position, uhaptics::Vec3& velocity) noexcept override {
+    return inner_->readUserPoint(position, velocity);
+  }
   void setUserForce(const uhaptics::Vec3& force) noexcept override { inner_->setUserForce(force); }
   std::string describe() const override { return inner_->describe() + ", counted"; }
   int commands = 0;

@@ -187,6 +187,52 @@ TEST_CASE("Contact classifier: a soft surface stays on the spring and reports it
   }
 }
 
+TEST_CASE("Contact classifier: a quantized pose jumping sideways, with friction of either sign, is read at its stiffness",
+          "[tau][classifier]") {
+  // What CHAI3D's scene does with the TAU's encoder pose: the tool position it is shown moves in
+  // steps (50 um in depth, 200 um jumps sideways as the six joints' counts change), and the finger
+  // proxy, held by static friction (mu = 1), answers a sideways jump with a lateral force of up to
+  // mu times the normal force, of either sign. A probe summing the force's rise along a normal that
+  // turns with those forces reads this 6000 N/m block as 4030 N/m.
+  for (const double stiffness : {2400.0, 6000.0}) {
+    CAPTURE(stiffness);
+    Classifier c({});
+    Tally tally;
+    const double mu = 1.0, step = 5e-5, jump = 2e-4;
+    Vec3 truth(0.0, 0.0, 0.3e-3);  // above the plane z = 0
+    double proxy_x = 0.0;
+    for (int i = 0; i < 2000 && tally.engaged + tally.soft == 0; ++i) {
+      const double lateral = jump * static_cast<double>((i / 2) % 3 - 1);  // -1, 0, +1 jumps
+      const Vec3 shown(lateral, 0.0, std::floor(truth.z() / step) * step);
+      const double depth = -shown.z();
+      Vec3 force = Vec3::Zero();
+      if (depth > 0.0) {
+        const double normal = stiffness * depth;
+        double tangential = stiffness * (proxy_x - shown.x());
+        if (std::abs(tangential) > mu * normal) {  // the proxy slips to the rim of the cone
+          tangential = std::copysign(mu * normal, tangential);
+          proxy_x = shown.x() + tangential / stiffness;
+        }
+        force = Vec3(tangential, 0.0, normal);
+      } else {
+        proxy_x = shown.x();
+      }
+      tick(c, force, shown, tally);
+      truth.z() -= kApproach * kPeriod;
+    }
+    CHECK(c.stiffness() == Approx(stiffness).epsilon(0.1));
+    if (stiffness >= c.options().stiff_threshold) {
+      CHECK(tally.engaged == 1);
+      // The plane's first normal is the probe's mean force: friction at the cone's rim (45 deg)
+      // that does not cancel exactly over the jumps' pattern tilts it by about 11 deg here (the
+      // last forces' tracked normal: 38 deg).
+      CHECK(angle(c.surface().normal, Vec3::UnitZ()) < 15.0);
+    } else {
+      CHECK(tally.soft == 1);
+    }
+  }
+}
+
 TEST_CASE("Contact classifier: a magnet's pull outside the surface neither sets the normal nor the reading",
           "[tau][classifier]") {
   // CHAI3D's cEffectMagnet (11-effects' first sphere): within reach outside the surface it pulls

@@ -59,7 +59,6 @@ class SimJointIo final : public JointIo {
     return plant_->lastFault();
   }
   bool movesOnlyInAdvance() const noexcept override { return true; }
-  bool readActual(double* positions) noexcept override { return plant_ && plant_->readActualJoints(positions); }
   bool readUserPoint(Vec3& position, Vec3& velocity) noexcept override {
     return plant_ && plant_->readUserPoint(position, velocity);
   }

@@ -122,19 +122,16 @@ std::unique_ptr<uhaptics::JointIo> cUhapticsDevice::makeJointIo() {
 
 bool cUhapticsDevice::readJointsLocked(bool a_first) noexcept {
   if (!m_io->read(m_positions.data())) return false;
-  senseLocked(m_positions.data(), m_io->readActual(m_actual.data()) ? m_actual.data() : m_positions.data(),
-              m_io->sampleTimeUs(), a_first);
+  senseLocked(m_positions.data(), m_io->sampleTimeUs(), a_first);
   return true;
 }
 
-void cUhapticsDevice::senseLocked(const double* a_positions, const double* a_actual, std::uint32_t a_sampleUs,
-                                  bool a_first) noexcept {
+void cUhapticsDevice::senseLocked(const double* a_positions, std::uint32_t a_sampleUs, bool a_first) noexcept {
   if (a_first) m_rateEstimator.reset();
   m_rateEstimator.update(a_positions, m_joints, a_sampleUs, m_rates.data());
   JointReading reading;
   reading.positions = a_positions;
   reading.rates = m_rates.data();
-  reading.actual = a_actual;
   reading.first = a_first;
   sense(reading);
 }
@@ -373,7 +370,7 @@ void cUhapticsDevice::servoTick(const uhaptics::DeviceSnapshot& a_snapshot, doub
   if (!m_servoArmed.load(std::memory_order_relaxed)) return;  // close() came first
   const double t = static_cast<double>(m_ticks) * m_servoPeriod;
   const uhaptics::Vec3 sensedBefore = m_state.position;
-  senseLocked(a_snapshot.position.data(), a_snapshot.position.data(), a_snapshot.sample_time_us[0], m_servoFirst);
+  senseLocked(a_snapshot.position.data(), a_snapshot.sample_time_us[0], m_servoFirst);
   const bool first = m_servoFirst;
   m_servoFirst = false;
   m_stats.recordReading(true);

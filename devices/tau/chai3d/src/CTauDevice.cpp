@@ -52,7 +52,6 @@ cTauDevice::cTauDevice(unsigned int a_deviceNumber, const uhaptics::DeviceSelect
   m_wallMode = static_cast<int>(a_selection.option("wall", 0.0, 0.0, 2.0));
   m_centre = model.homePose().head<3>();
   m_data = std::make_unique<uhaptics::TauData>(model);
-  m_actualData = std::make_unique<uhaptics::TauData>(model);
   // LQR gains at the workspace centre (paper 001 linearizes at one operating point).
   uhaptics::LqrWallRenderer::Options wallOptions;
   wallOptions.keep_direction = true;
@@ -165,7 +164,6 @@ std::unique_ptr<uhaptics::BoardPlant> cTauDevice::makeSimulatedPlant() {
 void cTauDevice::resetRendering() {
   m_lqr->reset();
   m_data->pose = m_model->homePose();  // forward kinematics' first guess
-  m_actualData->pose = m_model->homePose();
   m_classifier.reset();
   m_lqrEngaged = false;
   m_tau.setZero();
@@ -174,17 +172,9 @@ void cTauDevice::resetRendering() {
 void cTauDevice::sense(const JointReading& a_reading) noexcept {
   m_q = Eigen::Map<const uhaptics::Vec6>(a_reading.positions);
   m_qd = Eigen::Map<const uhaptics::Vec6>(a_reading.rates);
-  m_senseFault = m_model->forward(m_q, *m_data);  // the wall works from the encoders
+  m_senseFault = m_model->forward(m_q, *m_data);  // the wall and the scene work from the encoders
   if (m_senseFault != uhaptics::Fault::kNone) return;  // the last assembled state stays
-  if (a_reading.actual == a_reading.positions) {
-    updateState(*m_data, m_q);
-    return;
-  }
-  // A simulated TAU shows the scene the tool where it is (its encoders quantize the joints by
-  // 1.5 mrad, 0.1 mm at the tool, which the contact classifier's stiffness probe would read as
-  // surface motion; docs/tau.md).
-  const uhaptics::Vec6 actual = Eigen::Map<const uhaptics::Vec6>(a_reading.actual);
-  if (m_model->forward(actual, *m_actualData) == uhaptics::Fault::kNone) updateState(*m_actualData, actual);
+  updateState(*m_data, m_q);
 }
 
 void cTauDevice::checkFirstReading() {

@@ -1,6 +1,8 @@
 #include "uhaptics/renderers/tau_contact_classifier.hpp"
 
 #include <algorithm>
+#include <Eigen/Cholesky>
+#include <Eigen/Eigenvalues>
 #include <cmath>
 
 #include "uhaptics/core/fault.hpp"
@@ -12,6 +14,12 @@ namespace {
 // Depth the tool must travel into a contact before its stiffness is estimated: four encoder counts
 // at the tool (about 0.05 mm each), so quantization does not fake a stiff surface.
 constexpr double kProbeDepth = 2e-4;  // m
+// New forces the probe's fit needs at least: one encoder step moves the tool up to 0.25 mm, the
+// whole probe depth, and a fit through two or three points reads anything.
+constexpr int kProbeSamples = 8;
+// Added to the probe's position covariance [m^2]: a direction the tool moved less than 5 um in
+// says nothing of the surface's stiffness there.
+constexpr double kProbeRegularization = 2.5e-11;
 // Below this force the application's force says nothing about its surface: the session
 // statistics' contact threshold, 8 um of depth at 6000 N/m.
 constexpr double kTrackForce = 0.05;  // N
@@ -73,8 +81,7 @@ void TauContactClassifier::reset() noexcept {
   last_position_.setZero();
   frames_ticks_ = 0;
   overload_ticks_ = 0;
-  probe_force_ = 0.0;
-  probe_depth_ = 0.0;
+  probe_ = ProbeFit{};
   stiffness_ = 0.0;
   normal_ = Vec3::UnitZ();
   proxy_.setZero();
@@ -167,9 +174,54 @@ void TauContactClassifier::startContact(const Vec3& force, WallMode mode) noexce
   normal_ = force.normalized();
   has_proxy_ = false;
   trail_count_ = 0;
-  probe_force_ = 0.0;
-  probe_depth_ = 0.0;
   quiet_ticks_ = 0;
+}
+
+void TauContactClassifier::ProbeFit::start(const Vec3& position, const Vec3& normal) noexcept {
+  *this = ProbeFit{};
+  origin = position;
+  onset_normal = normal;
+}
+
+void TauContactClassifier::ProbeFit::add(const Vec3& position, const Vec3& force) noexcept {
+  const Vec3 x = position - origin;
+  ++count;
+  sum_x += x;
+  sum_f += force;
+  sum_xx.noalias() += x * x.transpose();
+  sum_xf.noalias() += x * force.transpose();
+  deepest = std::max(deepest, -onset_normal.dot(x));
+}
+
+double TauContactClassifier::ProbeFit::stiffness() const noexcept {
+  if (count < 2) return 0.0;
+  // F = F0 - K x by least squares over the samples: K^T = -Cxx^-1 Cxf, with Cxx regularized for
+  // directions the tool did not move in (they contribute no stiffness).
+  const double inv = 1.0 / count;
+  const Vec3 mean_x = inv * sum_x, mean_f = inv * sum_f;
+  const Mat3 cxx = inv * sum_xx - mean_x * mean_x.transpose() + kProbeRegularization * Mat3::Identity();
+  const Mat3 cxf = inv * sum_xf - mean_x * mean_f.transpose();
+  const Mat3 k_t = -cxx.ldlt().solve(cxf);
+  // A surface pushes back along its normal at k; a proxy held by static friction pulls the tool
+  // back sideways at the same k, a slipping one at less: the stiffest direction is the surface's.
+  // This reads k when the tool moved along the normal and across it (a quantized pose jumping
+  // sideways), but only k (n.u)(1 + n.u) / 2 when it moved along one line u.
+  const Mat3 k_sym = 0.5 * (k_t + k_t.transpose());
+  const Eigen::SelfAdjointEigenSolver<Mat3> eigen(k_sym, Eigen::EigenvaluesOnly);
+  const double k_matrix = eigen.eigenvalues()(2);
+  // Along the mean force's direction (the surface's normal, friction averaged): the slope of n.F
+  // against n.x. This reads k for motion along one line, and less when the tool also jumps
+  // sideways (the jumps load the fit's depth but, friction aside, not its force).
+  double k_normal = 0.0;
+  const double length = sum_f.norm();
+  if (length > 0.0) {
+    const Vec3 n = sum_f / length;
+    const double var = n.dot(cxx * n);
+    if (var > 0.0) k_normal = -n.dot(cxf * n) / var;
+  }
+  // Each reads low in the other's case: the larger is the better evidence.
+  const double k = std::max(k_matrix, k_normal);
+  return std::isfinite(k) ? k : 0.0;
 }
 
 void TauContactClassifier::update(const Vec3& force_in, const Vec3& position_in, WallMode mode) noexcept {
@@ -186,7 +238,11 @@ void TauContactClassifier::update(const Vec3& force_in, const Vec3& position_in,
   frames_ticks_ = last_force_.norm() >= kTrackForce ? frames_ticks_ + 1 : 1;
 
   if (state_ == State::kFree) {
-    if (magnitude > options_.contact_force && std::isfinite(magnitude)) startContact(force, mode);
+    if (magnitude > options_.contact_force && std::isfinite(magnitude)) {
+      startContact(force, mode);
+      probe_.start(position, normal_);
+      probe_.add(position, force);
+    }
   } else {
     if (mode == WallMode::kSpring && state_ != State::kSpring) {
       release();  // switched to the spring mid-contact
@@ -203,35 +259,34 @@ void TauContactClassifier::update(const Vec3& force_in, const Vec3& position_in,
       state_ = State::kSpring;
       events_.overload = true;
     } else if (state_ == State::kProbing && fresh) {
-      // Stiffness along the normal: force rise over depth, summed over new forces (a tool sliding
-      // over a curved surface at constant depth adds nothing to either, where a secant from the
-      // onset would count the surface's curvature as depth). The proxy is placed with the nominal
-      // stiffness until the probe has measured the scene's.
+      // Stiffness: a least-squares fit of the new forces against the positions they were computed
+      // at (ProbeFit::stiffness), over every sample since the onset, not a secant between two of
+      // them: the encoders' pose moves in steps of 0.05-0.25 mm, sideways too, and CHAI3D's proxy
+      // answers each sideways step with a friction force of either sign. The proxy is placed with
+      // the nominal stiffness until the probe has measured the scene's.
       //
-      // The probe measures one surface pushing the tool out while the tool goes in; what else the
-      // force does restarts it: a force against the normal (the contact began on an effect pulling
-      // the tool in, such as a magnet outside its object, whose force turns round at the surface)
-      // restarts it along the new force, and the tool coming back out past where the probe began
-      // restarts it from there (a secant through the way out can read any slope).
+      // The probe measures one surface pushing the tool out while the tool goes in: a force against
+      // the normal (the contact began on an effect pulling the tool in, such as a magnet outside its
+      // object, whose force turns round at the surface) restarts it along the new force.
       if (!(normal_.dot(force) > 0.0)) {
-        if (magnitude > options_.contact_force) startContact(force, mode);
-        probe_force_ = 0.0;
-        probe_depth_ = 0.0;
+        const bool restart = magnitude > options_.contact_force;
+        if (restart) startContact(force, mode);
+        probe_.start(position, normal_);
+        if (restart) probe_.add(position, force);
       } else {
         trackSurface(force, position, options_.nominal_stiffness, kProbeGain);
-        probe_force_ += normal_.dot(force - last_force_);
-        probe_depth_ += normal_.dot(last_position_ - position);
-        if (probe_depth_ < 0.0) {
-          probe_force_ = 0.0;
-          probe_depth_ = 0.0;
-        }
+        probe_.add(position, force);
       }
-      if (probe_depth_ >= kProbeDepth) {
-        const double k = probe_force_ / probe_depth_;
+      if (probe_.deepest >= kProbeDepth && probe_.count >= kProbeSamples) {
+        const double k = probe_.stiffness();
         stiffness_ = std::isfinite(k) ? std::max(0.0, k) : 0.0;
         if (stiffness_ > 0.0 && (stiffness_ >= options_.stiff_threshold || mode == WallMode::kLqr)) {
           state_ = State::kLqr;
           overload_ticks_ = 0;
+          // The plane's first normal: the probe's mean force, in which the friction of a pose
+          // jumping sideways averages out, rather than the tracked normal of its last forces.
+          const double mean = probe_.sum_f.norm();
+          if (mean > 0.0 && std::isfinite(mean)) normal_ = probe_.sum_f / mean;
           surface_.active = true;
           surface_.normal = normal_;
           surface_.point = position + (force - kHoldForce * normal_) / stiffness_;

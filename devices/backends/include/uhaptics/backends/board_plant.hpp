@@ -25,14 +25,8 @@ class BoardPlant {
   /// Integrates the plant over dt seconds with the held command.
   virtual void advance(double dt) noexcept = 0;
 
-  // What a simulation offers beyond a board (the "sim" joint I/O passes it on; the board emulator
-  // does not use it).
-  /// The joint positions as they are, without the sensors' error (encoder quantization),
-  /// jointCount() entries; false when the plant models no sensor error.
-  virtual bool readActualJoints(double* positions) noexcept {
-    (void)positions;
-    return false;
-  }
+  // What a simulation offers beyond a board: a user the caller simulates. Nothing else: the host
+  // sees a simulated or emulated device exactly as a board's sensors report it.
   /// Where the simulated user holds the device: the end effector's position [m] and velocity [m/s]
   /// in the device model's task frame (planar devices: x, y, 0) as they are, without sensor error:
   /// a hand feels the device as it is, not as its encoders report it. False when the plant has no

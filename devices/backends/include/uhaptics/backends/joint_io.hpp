@@ -88,13 +88,6 @@ class JointIo {
   /// Whether the device moves only in advance() (sim): a reading taken right after it is the newest
   /// there will be until the next advance(). A board moves on its own clock instead.
   virtual bool movesOnlyInAdvance() const noexcept { return false; }
-  /// sim: the joint positions of the last read() as they are, without the simulated sensors' error
-  /// (BoardPlant::readActualJoints); false when there is no such thing (a board, an ideal sensor).
-  /// Only the TAU's sim scene still uses it (docs/tau.md, "What the scene sees of a simulated TAU").
-  virtual bool readActual(double* positions) noexcept {
-    (void)positions;
-    return false;
-  }
   /// sim and emulated: where a user the caller simulates holds the device, as it is
   /// (BoardPlant::readUserPoint, model task frame); false for usb and plants without such a point.
   virtual bool readUserPoint(Vec3& position, Vec3& velocity) noexcept {

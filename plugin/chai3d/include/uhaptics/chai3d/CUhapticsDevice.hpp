@@ -164,9 +164,6 @@ class cUhapticsDevice : public cGenericHapticDevice {
     const double* positions;  // as the sensors give them (encoder counts times their resolution)
     const double* rates;      // JointRateEstimator over the device's sample clock (zero on the
                               // session's first reading)
-    /// A simulation's positions without sensor error (sim only), else `positions`. Only the TAU's
-    /// scene on sim still reads it, until its contact classifier tolerates quantization.
-    const double* actual;
     bool first;               // the session's first reading
   };
   /// Update what render() needs and m_state from a reading: the scene sees what the sensors say.
@@ -256,8 +253,8 @@ class cUhapticsDevice : public cGenericHapticDevice {
   void tickLocked() noexcept;
   /// Reads the joints and passes them to sense(); false (nothing sensed) when there is no reading.
   bool readJointsLocked(bool a_first) noexcept;
-  /// sense() on positions from the sensors (rates by the estimator; a_actual: see JointReading).
-  void senseLocked(const double* a_positions, const double* a_actual, std::uint32_t a_sampleUs, bool a_first) noexcept;
+  /// sense() on positions from the sensors (rates by the estimator).
+  void senseLocked(const double* a_positions, std::uint32_t a_sampleUs, bool a_first) noexcept;
   /// render() with the checks every backend applies: a fault or a non-finite effort sends zero.
   uhaptics::Fault renderChecked(const ServoInput& a_input) noexcept;
   /// The scripted hand's force on the simulated or emulated plant, from the sensed state.
@@ -289,7 +286,7 @@ class cUhapticsDevice : public cGenericHapticDevice {
   std::unique_ptr<uhaptics::ScriptedHand> m_hand;
   const int m_joints, m_actuators;
   std::unique_ptr<uhaptics::JointIo> m_io;  // every backend; opened in open(), closed in close()
-  std::array<double, uhaptics::wire::kMaxChannels> m_positions{}, m_rates{}, m_actual{}, m_efforts{};
+  std::array<double, uhaptics::wire::kMaxChannels> m_positions{}, m_rates{}, m_efforts{};
   uhaptics::JointRateEstimator m_rateEstimator;  // every backend's rates
   bool m_sensedAfterAdvance = false;  // sim: the joints were read right after the last step
   uhaptics::Vec3 m_commandForce = uhaptics::Vec3::Zero();

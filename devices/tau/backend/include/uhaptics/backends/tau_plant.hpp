@@ -27,11 +27,6 @@ class TauBoardPlant final : public HeldTorquePlant<6> {
   };
   TauBoardPlant(TauModel model, const Options& options);
   void advance(double dt) noexcept override;
-  bool readActualJoints(double* positions) noexcept override {
-    Eigen::Map<Vec6> out(positions);
-    out = sim_.q();
-    return true;
-  }
   bool readUserPoint(Vec3& position, Vec3& velocity) noexcept override {
     position = sim_.pose().head<3>();
     velocity = sim_.toolVelocity();

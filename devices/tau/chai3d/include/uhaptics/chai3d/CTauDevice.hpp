@@ -35,10 +35,9 @@
 //   below stiff_threshold), soft_stiffness_max_N_per_m (maximum of their stiffness), lqr_overloads
 //   (contacts the wall, saturated for 20 ms, handed to the spring).
 // Simulated backend: TauBoardPlant (SimulatedTau: lumped dynamics, quantized encoders, torque
-// saturation) without a hand of its own: the scripted hand's force acts at the tool. The renderers
-// work from the encoder readings on every backend; on sim the scene is shown the tool's pose without
-// encoder error (see sense()). Board backends: velocities from the readings' differences over the
-// board's sample clock.
+// saturation) without a hand of its own: the scripted hand's force acts at the tool. On every backend
+// the renderers and the scene work from the encoder readings (4096 counts per turn), velocities
+// from the shared rate estimator over the device's sample clock.
 #include <memory>
 
 #include "uhaptics/chai3d/CUhapticsDevice.hpp"
@@ -105,8 +104,7 @@ class cTauDevice : public cUhapticsDevice {
 
   std::unique_ptr<const uhaptics::TauModel> m_model;  // the renderers keep references
   std::unique_ptr<uhaptics::LqrWallRenderer> m_lqr;
-  std::unique_ptr<uhaptics::TauData> m_data;        // the encoders' pose: what the wall works from
-  std::unique_ptr<uhaptics::TauData> m_actualData;  // sim: the pose without encoder error (m_state)
+  std::unique_ptr<uhaptics::TauData> m_data;  // the encoders' pose: what the wall and the scene see
   uhaptics::Vec3 m_centre = uhaptics::Vec3::Zero();
   std::atomic<int> m_wallMode{C_TAU_WALL_AUTO};
   double m_toolDamping;

@@ -7,8 +7,12 @@
 // allocation-free.
 //
 // Engagement (wall mode kAuto). A contact starts when the application's force exceeds contact_force
-// (default 0.3 N). While the tool goes a further 0.2 mm in (the probe), the classifier measures the
-// scene's stiffness k = dF/dx along the contact normal: for CHAI3D, the material's setStiffness()
+// (default 0.3 N). While the tool goes a further 0.2 mm in along the onset's normal (the probe), the
+// classifier measures the scene's stiffness k by a least-squares fit of the application's forces
+// against the positions they were computed at, over all of the probe's new forces (the encoders'
+// pose moves in steps, sideways too, and CHAI3D's proxy answers a sideways step with friction):
+// the larger of the stiffest direction of the fitted stiffness matrix and the slope along the mean
+// force's direction (each reads low where the other does not). k is, for CHAI3D, the material's setStiffness()
 // value times tool->getWorkspaceScaleFactor(); CHAI3D's examples set stiffness as a fraction of
 // m_maxLinearStiffness / workspaceScaleFactor, so k = fraction x 6000 N/m on the TAU.
 // k >= stiff_threshold (default 3000 N/m, half the 6000 N/m that paper 001 finds the limit of
@@ -17,8 +21,7 @@
 // the compliance the application gave it. A contact too light to finish the probe (its force must
 // rise by k x 0.2 mm, ~1 N) stays with the spring. The probe measures one surface pushing the
 // tool out while it goes in: a force turning against the contact's normal (the contact began on an
-// effect pulling the tool in, such as CHAI3D's magnet) restarts it along the new force, and the
-// tool coming back out past the probe's start restarts it there. Mode kLqr engages the wall after the probe
+// effect pulling the tool in, such as CHAI3D's magnet) restarts it along the new force. Mode kLqr engages the wall after the probe
 // whatever k is (a soft object is then rendered rigid); mode kSpring never engages it.
 //
 // The wall's plane follows the application's proxy. A proxy force is F = k (proxy - tool), so the
@@ -134,8 +137,20 @@ class TauContactClassifier {
   Vec3 last_position_ = Vec3::Zero();  // the position it was computed at
   int frames_ticks_ = 0;               // servo ticks since the last new force
   int overload_ticks_ = 0;             // consecutive held ticks with a saturated wall command
-  double probe_force_ = 0.0;           // probe: force rise and depth along the normal since the onset
-  double probe_depth_ = 0.0;
+  // The probe: a least-squares fit of force against position over its new forces (sums of the
+  // samples, positions relative to the onset), and its travel along the onset's normal.
+  struct ProbeFit {
+    int count = 0;
+    Vec3 sum_x = Vec3::Zero(), sum_f = Vec3::Zero();
+    Mat3 sum_xx = Mat3::Zero(), sum_xf = Mat3::Zero();
+    double deepest = 0.0;  // the deepest sample below the onset, along the onset's normal [m]
+    Vec3 origin = Vec3::Zero(), onset_normal = Vec3::UnitZ();
+    void start(const Vec3& position, const Vec3& normal) noexcept;
+    void add(const Vec3& position, const Vec3& force) noexcept;
+    /// The largest eigenvalue of the symmetric part of K in F = F0 - K x, fitted over the samples.
+    double stiffness() const noexcept;
+  };
+  ProbeFit probe_;
   double stiffness_ = 0.0;             // measured k
   Vec3 normal_ = Vec3::UnitZ();        // tracked surface normal
   Vec3 proxy_ = Vec3::Zero();          // the proxy at the last force that showed it
