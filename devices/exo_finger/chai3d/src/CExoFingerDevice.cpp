@@ -19,7 +19,8 @@ constexpr double kContactThreshold = 0.05;
 cExoFingerDevice::cExoFingerDevice(unsigned int a_deviceNumber, const uhaptics::DeviceSelection& a_selection)
     : cUhapticsDevice(a_deviceNumber, a_selection, 1.0 / 500.0, Model::kJoints, Model::kActuated),
       m_model(std::make_unique<Model>(Model::load(paramsDirectory() + "/exo_finger.json"))),
-      m_couplingStiffness(a_selection.option("coupling_stiffness", 1.0, 1e-3, 100.0)) {
+      m_couplingStiffness(a_selection.option("coupling_stiffness", 1.0, 1e-3, 100.0)),
+      m_standardMethod(a_selection.option("method", 0.0, 0.0, 1.0) == 1.0) {
   const Model& model = *m_model;
   // Survey the working range: fingertip extent (workspace), actuator lever |d x / d l_x| (for Z_q)
   // and fingertip displacement per actuator length (for the force the device can show).
@@ -65,12 +66,14 @@ cExoFingerDevice::cExoFingerDevice(unsigned int a_deviceNumber, const uhaptics::
   gains.Zq = Model::ActuatorVector::Constant(m_couplingStiffness * lever_sq).asDiagonal();  // Z_x seen at l_x
   gains.force_limit = model.effortLimits();
   m_renderer = std::make_unique<Renderer>(model, gains);
+  m_standard = std::make_unique<uhaptics::StandardRenderer<Model>>(model, gains);
 
   using Kind = uhaptics::RendererFigure::Kind;
   m_figureContactTicks = sessionStats().declareFigure("proxy_contact_ticks", Kind::kCount);
   m_figureProxyDistance = sessionStats().declareFigure("max_proxy_distance_mm", Kind::kMaximum);
   m_figureActuatorForce = sessionStats().declareFigure("max_actuator_force_N", Kind::kMaximum);
   m_figureSolves = sessionStats().declareFigure("proxy_solves", Kind::kCount);
+  m_figureActiveImpedance = sessionStats().declareFigure("active_impedance_ticks", Kind::kCount);
 }
 
 cExoFingerDevice::~cExoFingerDevice() { close(); }
@@ -161,7 +164,9 @@ uhaptics::Fault cExoFingerDevice::render(const ServoInput& a_input, double* a_ef
   const bool solves = !(x_proxy - m_data.x).isZero(0.0) && x_proxy.allFinite() && m_data.q.allFinite() &&
                       m_data.in_range && m_data.x.allFinite() && m_data.J.allFinite();
   // The sensed state's kinematics (sense()) are the renderer's: it evaluates the model only to solve.
-  const uhaptics::Fault fault = m_renderer->tick(m_data.q, x_proxy, m_data.x, m_data.J, m_data.in_range, m_actuator);
+  const uhaptics::Fault fault =
+      m_standardMethod ? m_standard->tick(m_data.q, x_proxy, m_data.x, m_data.J, m_data.in_range, m_actuator)
+                       : m_renderer->tick(m_data.q, x_proxy, m_data.x, m_data.J, m_data.in_range, m_actuator);
   const double magnitude = std::abs(m_actuator(0));
   if (solves) {
     sessionStats().count(m_figureSolves);
@@ -173,6 +178,13 @@ uhaptics::Fault cExoFingerDevice::render(const ServoInput& a_input, double* a_ef
         uhaptics::regularizedSolve(Jtip.transpose(), m_couplingStiffness * (x_proxy - m_data.x));
     if (fault == uhaptics::Fault::kNone && pull.norm() > kContactThreshold) {
       sessionStats().count(m_figureContactTicks);
+      // Passivity of what the method displays here: the symmetric part of d tau / d q must not
+      // have a positive eigenvalue (relative to the impedance's size: rounding is not activity).
+      const uhaptics::Mat2 Z = m_standardMethod ? m_standard->displayedImpedance() : m_renderer->displayedImpedance();
+      const uhaptics::Mat2 symmetric = 0.5 * (Z + Z.transpose());
+      const double trace = symmetric.trace(), det = symmetric.determinant();
+      const double largest = 0.5 * trace + std::sqrt(std::max(0.0, 0.25 * trace * trace - det));
+      if (largest > 1e-9 * Z.norm()) sessionStats().count(m_figureActiveImpedance);
     }
   }
   sessionStats().observeMaximum(m_figureActuatorForce, magnitude);
@@ -212,7 +224,8 @@ uhaptics::Vec2 cExoFingerDevice::getFingerJointTorque() {
 
 uhaptics::Vec2 cExoFingerDevice::getFingerTorque() {
   std::lock_guard<std::mutex> lock(deviceMutex());
-  return m_plant ? m_plant->sim().state().finger_torque : uhaptics::Vec2::Zero();
+  // On emulated the plant runs inside the board emulator, in the servo thread: not ours to read.
+  return m_plant && !rendersInServoThread() ? m_plant->sim().state().finger_torque : uhaptics::Vec2::Zero();
 }
 
 }  // namespace chai3d

@@ -23,6 +23,13 @@
 //   max_proxy_distance_mm  largest fingertip distance between the probe f(q) and the proxy target
 //                          the solve used, x_p [mm]
 //   max_actuator_force_N   largest |actuator command| sent [N]
+//   active_impedance_ticks contact ticks in which the displayed impedance d tau / d q of the method
+//                          running (its theoretical form at the finger's configuration: eq. 9,
+//                          -S^T Z_q S, for the subspace proxy; eq. 2, -S^T S J^T Z_x J, for the
+//                          standard method) has a positive eigenvalue in its symmetric part: the
+//                          device can return more energy than the proxy spring stored (paper 000,
+//                          Fig. 4). Zero with the subspace proxy; the standard method couples the
+//                          actuator to the sensed-only joint and goes active in parts of the range.
 //
 // Simulated backend: the finger is position-driven (paper 000's setting), following flexion-
 // extension cycles whose period is the scripted hand's lap time, or, when the selection names the
@@ -44,14 +51,19 @@ typedef std::shared_ptr<cExoFingerDevice> cExoFingerDevicePtr;
 class cExoFingerDevice : public cUhapticsDevice {
  public:
   /// Options ("options/exo/..."): coupling_stiffness Z_x [N m/rad], default 1.0; force_loop_lag
-  /// 1 (default) / 0: the board's force loop as a first-order lag, or ideal.
+  /// 1 (default) / 0: the board's force loop as a first-order lag, or ideal; method 0 (default):
+  /// paper 000's nonlinear subspace proxy, 1: the standard method it improves on (S J^T F, eq. 1),
+  /// for comparison.
   cExoFingerDevice(unsigned int a_deviceNumber, const uhaptics::DeviceSelection& a_selection);
   virtual ~cExoFingerDevice();
   static cExoFingerDevicePtr create(const uhaptics::DeviceSelection& a_selection, unsigned int a_deviceNumber = 0) {
     return std::make_shared<cExoFingerDevice>(a_deviceNumber, a_selection);
   }
 
-  virtual std::string getRendererName() const { return uhaptics::NonlinearSubspaceRenderer<uhaptics::ExoFingerModel>::kName; }
+  virtual std::string getRendererName() const {
+    return m_standardMethod ? uhaptics::StandardRenderer<uhaptics::ExoFingerModel>::kName
+                            : uhaptics::NonlinearSubspaceRenderer<uhaptics::ExoFingerModel>::kName;
+  }
 
   /// Finger joint angles (q_MCP, q_PIP) [rad] of the latest state.
   uhaptics::Vec2 getFingerAngles();
@@ -90,13 +102,16 @@ class cExoFingerDevice : public cUhapticsDevice {
   std::unique_ptr<const Model> m_model;  // the renderer keeps a reference to it
   const uhaptics::ExoFingerBoardPlant* m_plant = nullptr;  // sim backend: the simulated finger (getFingerTorque)
   std::unique_ptr<Renderer> m_renderer;
+  std::unique_ptr<uhaptics::StandardRenderer<Model>> m_standard;
   uhaptics::ExoFingerData m_data{*m_model};
   double m_couplingStiffness;                       // Z_x (scalar), N m/rad
+  const bool m_standardMethod;  // option "method" 1: paper 000's baseline instead of the subspace proxy
   uhaptics::Vec2 m_centre = uhaptics::Vec2::Zero();  // fingertip workspace centre, hand frame
   Model::ActuatorVector m_actuator = Model::ActuatorVector::Zero();
   uhaptics::Vec2 m_fingerTorqueCommand = uhaptics::Vec2::Zero();  // setFingerJointTorque()
   // Renderer figures (session statistics), see the class comment.
-  int m_figureContactTicks = -1, m_figureProxyDistance = -1, m_figureActuatorForce = -1, m_figureSolves = -1;
+  int m_figureContactTicks = -1, m_figureProxyDistance = -1, m_figureActuatorForce = -1, m_figureSolves = -1,
+      m_figureActiveImpedance = -1;
 };
 
 }  // namespace chai3d
