@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <limits>
 
 #include "uhaptics/backends/board_emulator.hpp"
 #include "uhaptics/protocol/libusb_transport.hpp"
@@ -212,17 +213,21 @@ void JointRateEstimator::update(const double* positions, int n, std::uint32_t sa
   for (int i = 0; i < n && count_ > 1; ++i) {
     const double q = history_[head_][i];
     const double d = resolution_[i];
-    // The longest window whose end-point line fits every sample inside it within d.
-    double slope = (q - history_[slot(1)][i]) / (elapsed_ - time_[slot(1)]);
+    // The longest window whose end-point line fits every sample inside it within d. A slope fits
+    // sample j (dt_j back) when it lies in [(q - q_j - d) / dt_j, (q - q_j + d) / dt_j]: the
+    // windows are tried longest-last, each against the intersection of its inner samples'
+    // intervals, so the search is linear in the window.
+    const int previous = slot(1);
+    double slope = (q - history_[previous][i]) / (elapsed_ - time_[previous]);
+    double lo = -std::numeric_limits<double>::infinity(), hi = std::numeric_limits<double>::infinity();
     for (int w = 2; d > 0.0 && w < count_; ++w) {
+      const int inner = slot(w - 1);
+      const double inner_dt = elapsed_ - time_[inner];
+      lo = std::max(lo, (q - history_[inner][i] - d) / inner_dt);
+      hi = std::min(hi, (q - history_[inner][i] + d) / inner_dt);
       const int start = slot(w);
       const double candidate = (q - history_[start][i]) / (elapsed_ - time_[start]);
-      bool fits = true;
-      for (int j = 1; j < w && fits; ++j) {
-        const int k = slot(j);
-        fits = std::abs(history_[k][i] - (q - candidate * (elapsed_ - time_[k]))) <= d;
-      }
-      if (!fits) break;
+      if (candidate < lo || candidate > hi) break;
       slope = candidate;
     }
     rate_[i] = slope;
