@@ -209,7 +209,13 @@ void JointRateEstimator::update(const double* positions, int n, std::uint32_t sa
   count_ = std::min(count_ + 1, kHistory);
   previous_us_ = sample_us;
   have_previous_ = true;
-  const auto slot = [this](int back) { return (head_ + kHistory - back) % kHistory; };
+  // Per window length w: the sample w back and 1 / its age, shared by every joint.
+  std::array<int, kHistory> back{};
+  std::array<double, kHistory> inv_age{};
+  for (int w = 1; w < count_; ++w) {
+    back[w] = (head_ + kHistory - w) % kHistory;
+    inv_age[w] = 1.0 / (elapsed_ - time_[back[w]]);
+  }
   for (int i = 0; i < n && count_ > 1; ++i) {
     const double q = history_[head_][i];
     const double d = resolution_[i];
@@ -217,16 +223,13 @@ void JointRateEstimator::update(const double* positions, int n, std::uint32_t sa
     // sample j (dt_j back) when it lies in [(q - q_j - d) / dt_j, (q - q_j + d) / dt_j]: the
     // windows are tried longest-last, each against the intersection of its inner samples'
     // intervals, so the search is linear in the window.
-    const int previous = slot(1);
-    double slope = (q - history_[previous][i]) / (elapsed_ - time_[previous]);
+    double slope = (q - history_[back[1]][i]) * inv_age[1];
     double lo = -std::numeric_limits<double>::infinity(), hi = std::numeric_limits<double>::infinity();
     for (int w = 2; d > 0.0 && w < count_; ++w) {
-      const int inner = slot(w - 1);
-      const double inner_dt = elapsed_ - time_[inner];
-      lo = std::max(lo, (q - history_[inner][i] - d) / inner_dt);
-      hi = std::min(hi, (q - history_[inner][i] + d) / inner_dt);
-      const int start = slot(w);
-      const double candidate = (q - history_[start][i]) / (elapsed_ - time_[start]);
+      const double rise = q - history_[back[w - 1]][i];
+      lo = std::max(lo, (rise - d) * inv_age[w - 1]);
+      hi = std::min(hi, (rise + d) * inv_age[w - 1]);
+      const double candidate = (q - history_[back[w]][i]) * inv_age[w];
       if (candidate < lo || candidate > hi) break;
       slope = candidate;
     }
