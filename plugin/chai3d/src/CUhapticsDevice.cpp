@@ -61,7 +61,13 @@ cUhapticsDevice::cUhapticsDevice(unsigned int a_deviceNumber, const uhaptics::De
   m_bridge = std::make_unique<ServoBridge>(*this);
 }
 
-cUhapticsDevice::~cUhapticsDevice() { stopStatsWriter(); }
+cUhapticsDevice::~cUhapticsDevice() {
+  // Subclasses close() in their destructors; a device left open here still must not leave a servo
+  // thread calling into this object's (or a destroyed subclass's) members.
+  m_servoArmed.store(false);
+  if (m_io) m_io->close();
+  stopStatsWriter();
+}
 
 void cUhapticsDevice::setCommonSpecifications(const std::string& a_modelName, bool a_orientation) {
   m_specifications.m_model = C_HAPTIC_DEVICE_CUSTOM;
