@@ -106,8 +106,8 @@ class cUhapticsDevice : public cGenericHapticDevice {
   double getServoPeriod() const { return m_servoPeriod; }
   /// Simulated time [s] = servo ticks x period.
   double getSimulationTime();
-  /// Replaces the scripted hand (throws uhaptics::Error on invalid options); sim and emulated, while
-  /// closed on emulated (the servo thread owns it while open).
+  /// Replaces the scripted hand (throws uhaptics::Error on invalid options); sim and emulated (the
+  /// ticking thread uses it under the device mutex, which this takes).
   void setScriptedHand(const uhaptics::ScriptedHandOptions& a_options);
   void setScriptedHandEnabled(bool a_enabled);
   bool getScriptedHandEnabled() const { return m_handEnabled; }

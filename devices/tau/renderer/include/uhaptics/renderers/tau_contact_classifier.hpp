@@ -138,7 +138,7 @@ class TauContactClassifier {
   int frames_ticks_ = 0;               // servo ticks since the last new force
   int overload_ticks_ = 0;             // consecutive held ticks with a saturated wall command
   // The probe: a least-squares fit of force against position over its new forces (sums of the
-  // samples, positions relative to the onset), and its travel along the onset's normal.
+  // samples, positions relative to the onset), and its deepest sample along the onset's normal.
   struct ProbeFit {
     int count = 0;
     Vec3 sum_x = Vec3::Zero(), sum_f = Vec3::Zero();
