@@ -9,8 +9,8 @@
 // velocity terms) are refreshed once per servo period; the substeps integrate with them frozen
 // (semi-implicit Euler), tracking the tool by first-order kinematics. At the speeds of a wall
 // contact (< 0.1 m/s) the configuration moves < 0.1 mm per period, so freezing them changes the
-// result far less than the encoder quantization (tests/tau/simulated_tau_test.cpp: < 0.1 % of the
-// penetration against a 4x finer refresh; halving the substep changes it by < 2 %).
+// result far less than the encoder quantization (tests/tau/simulated_tau_test.cpp checks both the
+// refresh and the substep; docs/tau.md, "Simulated device", has the figures).
 #include <cstdint>
 #include <Eigen/Cholesky>
 #include <random>

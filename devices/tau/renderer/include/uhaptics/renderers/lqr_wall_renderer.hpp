@@ -29,8 +29,7 @@ class LqrWallRenderer {
     // gain, so the contact force bends away from the normal). true: the contact torque is scaled
     // down as a whole until gravity compensation plus it fit the torque limits, so the wall pushes
     // less hard but still along its normal (for a tool the user moves freely along the surface,
-    // where a bent force pushes it sideways: tests/tau, 14 N into a wall tilted 30 deg is held at
-    // 0.5 mm with it and lost without it).
+    // where a bent force pushes it sideways; docs/tau.md, "Velocity observer and sliding").
     bool keep_direction = false;
   };
   LqrWallRenderer(const TauModel& model, const LqrWallGains& gains, const Options& options);
