@@ -26,6 +26,8 @@ class TauBoardPlant final : public HeldTorquePlant<6> {
     // TAU board damps the handle"). >= 0.
     double tool_rotational_damping = 0.01;
   };
+  /// Starts at rest at the model's home joints. Throws uhaptics::Error on invalid options (see
+  /// SimulatedTau) or when the model does not assemble at home.
   TauBoardPlant(TauModel model, const Options& options);
   void advance(double dt) noexcept override;
   bool readUserPoint(Vec3& position, Vec3& velocity) noexcept override {
