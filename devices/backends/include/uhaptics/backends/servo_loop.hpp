@@ -131,6 +131,8 @@ SafetyOutcome enforceEffortLimits(double* efforts, int n, const double* limits) 
 
 class ServoLoop {
  public:
+  /// Keeps references to transport and renderer (both must outlive the loop). Throws Error when the
+  /// descriptor or the configuration is invalid (DeviceDescriptor::validate, ServoConfig::validate).
   ServoLoop(const DeviceDescriptor& device, Transport& transport, const ServoConfig& config,
             ServoRenderer* renderer = nullptr);
   ~ServoLoop();

@@ -23,7 +23,7 @@ struct TimingReport {
   Percentiles wake_latency;   // jitter: actual wake-up minus deadline
   std::uint64_t overruns = 0;        // cycles that woke a full period or more late
   std::uint64_t missed_periods = 0;  // deadlines skipped because of overruns
-  std::string format() const;        // one block of text for logs and the README
+  std::string format() const;        // one block of text for logs and docs/hardware.md
 };
 
 class TimingStats {

@@ -64,13 +64,11 @@ class cPlanarLinkageDevice : public cUhapticsDevice {
   /// zero as a half cosine over null_space_ramp_time: |tau_N| <= r(t) max_null_space_torque, and
   /// r grows by at most pi dt / (2 null_space_ramp_time) per tick. The primary task J^T (alpha F)
   /// keeps its full authority (the RHI's 3, 3, 1, 1 N m), so no actuator gets more than its share of J^T F
-  /// plus max_null_space_torque. Why: the paper's beta = 20 asks for 5.4 N m at the home
-  /// configuration, and without the envelope the first tick in an empty scene commanded the full
-  /// 3 N m. The bound also caps the joint-limit terms: with 0.5 N m the RHI pressed by a stock
-  /// cursor reached its simulated stops by up to 5 mrad in two of five scenes, where 1 N m kept every
-  /// joint at least 56 mrad away.
-  /// The axis filter: a CHAI3D proxy's force turns by a few degrees within a tick, which the
-  /// stiff ellipsoid's 37:1 axes would pass on to the null-space torque.
+  /// plus max_null_space_torque. Why: with the paper's beta = 20 the FME gradient at the RHI's home
+  /// configuration asks for more than its actuators' limits, which an empty scene would get at its
+  /// first tick; the bound also caps the joint-limit terms. The axis filter keeps a CHAI3D proxy
+  /// force's tick-to-tick turns, which the stiff ellipsoid's elongated axes amplify, out of the
+  /// null-space torque. Figures: docs/rhi.md, "In CHAI3D".
   /// Throws uhaptics::Error when an option is out of range (naming it) or the set is inconsistent.
   /// a_model: the device's model; a_title: its name in the CHAI3D specification; a_workspaceRadius:
   /// the default of the workspace_radius option [m], a disc around home well inside the reach.

@@ -68,6 +68,8 @@ typedef std::shared_ptr<cUhapticsDevice> cUhapticsDevicePtr;
 
 class cUhapticsDevice : public cGenericHapticDevice {
  public:
+  /// sim, real-time mode: the most servo ticks one application call simulates; a longer stall of
+  /// the application's loop drops the rest instead of simulating it in a burst.
   static constexpr int kMaxCatchUpTicks = 50;
   /// Board backends: periods over which the efforts ramp to zero once the application's input is
   /// stale (10 ms at 1 kHz).
@@ -78,13 +80,25 @@ class cUhapticsDevice : public cGenericHapticDevice {
   cUhapticsDevice& operator=(const cUhapticsDevice&) = delete;
 
   // ---- CHAI3D's device contract -------------------------------------------------------------
+  // The getters return C_SUCCESS (true) while the device is open and C_ERROR (false) otherwise
+  // (still filling in the last state it had). Nothing here throws.
+  /// Connects the selected backend, waits up to 2 s for the first joint reading and resets the
+  /// rendering. C_SUCCESS when open (also when it already was); on failure it prints why to stderr,
+  /// leaves nothing running or commanded and returns C_ERROR. Never throws.
   virtual bool open();
+  /// Commands zero, ends the session (a board's servo thread stops) and writes the statistics
+  /// file if one is set. Idempotent; C_SUCCESS.
   virtual bool close();
+  /// Nothing to calibrate (positions are absolute): C_SUCCESS while open.
   virtual bool calibrate(bool a_forceCalibration = false);
+  /// Position [m] in the device frame, origin at the workspace centre.
   virtual bool getPosition(cVector3d& a_position);
+  /// Orientation in the device frame (identity for devices that sense none).
   virtual bool getRotation(cMatrix3d& a_rotation);
+  /// [m/s] and [rad/s], device frame, from the sensed joint rates.
   virtual bool getLinearVelocity(cVector3d& a_linearVelocity);
   virtual bool getAngularVelocity(cVector3d& a_angularVelocity);
+  /// Sensed joints [rad, or m for prismatic joints] in the device's joint order; 0 beyond its count.
   virtual bool getJointAnglesRad(double a_jointAnglesRad[C_MAX_DOF]);
   /// getLinearVelocity() and getAngularVelocity() in one call (one lock): CHAI3D's custom-device
   /// slot copies both after every call it forwards.
@@ -94,8 +108,12 @@ class cUhapticsDevice : public cGenericHapticDevice {
   virtual bool getGripperAngularVelocity(double& a_gripperAngularVelocity);
   /// The simulated devices have no buttons: always 0.
   virtual bool getUserSwitches(unsigned int& a_userSwitches);
+  /// The force [N] and torque [N m] to render, device frame; the gripper force is ignored. A
+  /// non-finite value renders zero, counts as a fault (getSessionStats()) and returns C_ERROR, as
+  /// does a call while closed. On sim it also advances the simulation (see above).
   virtual bool setForceAndTorqueAndGripperForce(const cVector3d& a_force, const cVector3d& a_torque,
                                                 double a_gripperForce);
+  /// false: the servo ticks render zero force and torque until re-enabled. Always C_SUCCESS.
   virtual bool enableForces(bool a_value);
 
   // ---- uhaptics extras ----------------------------------------------------------------------
@@ -103,6 +121,7 @@ class cUhapticsDevice : public cGenericHapticDevice {
   /// sim only: a board's servo thread keeps its own clock.
   void setLockStep(bool a_lockStep);
   bool getLockStep() const { return m_lockStep; }
+  /// The device's control period [s].
   double getServoPeriod() const { return m_servoPeriod; }
   /// Simulated time [s] = servo ticks x period.
   double getSimulationTime();

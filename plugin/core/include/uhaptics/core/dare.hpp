@@ -9,11 +9,12 @@
 // DiscreteAlgebraicRiccatiEquation is also Schur based. We chose SDA because (i) it needs only
 // n x n LU solves and products (no QZ, which Eigen lacks for reordering), (ii) it converges
 // quadratically, so the paper's hard weights (1e7 on integrators whose discrete eigenvalues sit at
-// exactly 1, next to fast velocity modes) take 11 doublings (0.18 ms CPU for 18 states) where the
-// plain Riccati recursion needs ~600 steps (3.2 ms) (tools/bench/lqr_bench.cpp), and (iii) it is
-// cheap enough to redesign near the 1 ms servo period. Because SDA's preconditions are not checked by the iteration itself, we
-// check them explicitly (Hautus/PBH tests on the eigenvalues outside the open unit disc), verify the
-// residual and the closed loop afterwards, and throw uhaptics::Error rather than return a wrong P.
+// exactly 1, next to fast velocity modes) take a few doublings where the plain Riccati recursion
+// needs hundreds of steps, and (iii) it is cheap enough to redesign within the 1 ms servo period
+// (figures: docs/tau.md, "DARE solver"). Because SDA's preconditions are not checked by the
+// iteration itself, we check them explicitly (Hautus/PBH tests on the eigenvalues outside the open
+// unit disc), verify the residual and the closed loop afterwards, and throw uhaptics::Error rather
+// than return a wrong P.
 // All of this runs in balanced state units: a power-of-two diagonal scaling that minimizes the norms
 // of A (off-diagonal), B R^-1 B^T and Q together, so the rank tests, the stopping rule and the
 // checks give the same verdict whatever units the caller's states are in (a rank test in raw units

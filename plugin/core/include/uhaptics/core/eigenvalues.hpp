@@ -2,9 +2,9 @@
 // Eigenvalues of general (non-symmetric) real matrices, for set-up code and checks: the DARE's
 // Hautus tests and closed-loop checks, the LQR design's pole report, and the tests that verify them.
 //
-// They are computed in one translation unit (eigenvalues.cpp) on purpose: instantiating Eigen's
-// EigenSolver<MatrixXd> costs about 25 s of GCC time in every file that does it, and the callers
-// only need the numbers.
+// They are computed in one translation unit (eigenvalues.cpp) on purpose: Eigen's
+// EigenSolver<MatrixXd> is one of the slowest instantiations to compile (docs/building.md,
+// "Keeping the build fast"), and the callers only need the numbers.
 #include <Eigen/Core>
 
 #include "uhaptics/core/types.hpp"

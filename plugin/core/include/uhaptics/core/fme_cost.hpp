@@ -52,7 +52,7 @@ bool fmeCostValue(const Model& model, const Vec<Model::kJoints>& q, const Vec<Mo
 /// nu and d nu/dq at q, given J = jacobian(q) (the caller usually has it already). False when
 /// J W W J^T is singular to within min_inverse_condition (see weightedFme) or nu is undefined.
 /// fd_relative_step: the central-difference step of kFiniteDifference (centralDifferenceStep's
-/// default sits at the knee of its error curve: tools/bench/rhi_bench.cpp, README).
+/// default sits at the knee of its error curve: tools/bench/rhi_bench.cpp, docs/benchmarks.md).
 template <class Model>
 bool fmeCostGradient(const Model& model, const Vec<Model::kJoints>& q, const Mat<Model::kTask, Model::kJoints>& J,
                      const Vec<Model::kJoints>& inv_limits_sq, const Mat<Model::kTask, Model::kTask>& Mdes,

@@ -66,8 +66,9 @@ struct RandomParameterLqrResult {
 ///   P = Q + E[A^T P A] - (E[A^T P B] + N) (R + E[B^T P B])^-1 (E[B^T P A] + N^T)
 /// by value iteration from P = 0 (the finite-horizon costs, nondecreasing), K = (R + E[B^T P B])^-1
 /// (E[B^T P A] + N^T), then checks the residual and mean-square stability. N may be empty (no cross
-/// term). Convergence is geometric at about the mean-square closed-loop radius (TAU wall: ~150 steps,
-/// but the stability check makes the whole design ~0.5 s: set-up only, not a servo-period redesign).
+/// term). Convergence is geometric at about the mean-square closed-loop radius: set-up code, not a
+/// servo-period redesign (the TAU wall's figures: docs/tau.md, "Random 0-3 sample command delay").
+/// Sizes: A_i n x n, B_i n x m, Q n x n, R m x m, N n x m; probabilities >= 0, summing to 1.
 /// Throws Error (sizes, probabilities, no convergence, not mean-square stable). Set-up code.
 RandomParameterLqrResult solveRandomParameterLqr(const std::vector<MatX>& A, const std::vector<MatX>& B,
                                                  const std::vector<double>& probabilities, const MatX& Q,

@@ -1,7 +1,7 @@
 #pragma once
 // Singularity tests on an LU factorization that decide like Eigen's rcond() estimate but usually
-// without running it (the estimate costs several triangular solves; in the TAU's servo tick and
-// simulator it took a quarter of the time).
+// without running it (the estimate costs several triangular solves, and servo code such as the
+// TAU's forward kinematics and LQR wall tests every factorization it uses).
 //
 // With P A = L U: ||A||_1 <= ||L||_1 ||U||_1 and ||A^-1||_1 <= ||U^-1||_1 ||L^-1||_1, and for a
 // triangular T, |T^-1| <= C(T)^-1 elementwise, C(T) the comparison matrix (|t_ii| on the diagonal,

@@ -10,7 +10,7 @@
 // at singular configurations).
 //
 // Gauss-Newton is the default: on the exoskeleton it needs fewer model evaluations than
-// Levenberg-Marquardt for the same accuracy (README, "Finger exoskeleton"); LM is kept for models
+// Levenberg-Marquardt for the same accuracy (docs/exo-finger.md, "Speed"); LM is kept for models
 // whose residual is large at the optimum or whose warm start is poor.
 #include <algorithm>
 #include <cmath>

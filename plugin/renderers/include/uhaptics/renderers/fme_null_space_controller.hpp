@@ -63,46 +63,42 @@ struct FmeControllerOptions {
   // The stiff ellipsoid's major axis follows the contact force's direction through a first-order
   // filter with this time constant while any of the stiff ellipsoid is in use (it takes the force's
   // direction directly while the free one is settled, so a switch starts from the current force).
-  // Why: a CHAI3D proxy's force turns by a few degrees within a tick when its tangential part
-  // resets (about every 6 ms on a mesh pressed by the RHI), and the stiff ellipsoid's 37:1 axes
-  // turn the null-space torque with it by up to 0.3 N m per tick. 0: each tick's force (the paper).
+  // The filter keeps a proxy force's tick-to-tick turns (a CHAI3D proxy's tangential part resetting)
+  // out of the null-space torque, which the stiff ellipsoid's elongated axes would amplify
+  // (docs/rhi.md, "In CHAI3D"). 0: each tick's force (the paper).
   double stiff_direction_time = 0.0;  // [s], >= 0
   // Joint-limit avoidance (limits from the model's jointLimits() or setJointLimits()): barrier
   // active within limit_margin of a bound, torque limit_gain (1 - margin^2 / d^2) at distance d.
-  // limit_gain = 0 turns it off. Assumed values (the paper has no limit term): 0.5 N m and
-  // 0.25 rad keep the RHI at least ~0.1 rad from its stops against beta = 20 (tests/rhi).
-  double limit_gain = 0.5;    // k_L [N m]
-  double limit_margin = 0.25; // delta [rad]
+  // limit_gain = 0 turns it off. Assumed values, the paper has no limit term (docs/rhi.md,
+  // "Joint limits").
+  double limit_gain = 0.5;    // k_L [N m], >= 0
+  double limit_margin = 0.25; // delta [rad], > 0
   // Approach-speed cap (a velocity damper): a limited coordinate s_j = C_j q may approach a bound
   // at most at limit_speed, falling in proportion to the distance inside the margin (zero at the
   // bound); faster approach is braked by (m_j / limit_brake_time) times the excess, projected into
   // the null space like the barrier, with m_j = 1 / (C_j M^-1 P C_j^T) the inertia the coordinate
   // shows to a null-space torque along C_j (P = I - J^T J#^T; M^-1 P is the null-space mobility),
   // so one tick removes dt / limit_brake_time of the excess (0.2 at 1 kHz, 5 ms) whatever the
-  // configuration. (C_j M C_j^T misjudges it both ways on the RHI, up to 14 times too large,
-  // which makes the per-tick gain 2.8 and the brake unstable, and up to 44 times too small
-  // (tests/rhi); 9 times too large for q1 - q2 with a CHAI3D cursor on a mesh, where the brake
-  // rang at the servo rate and stepped the null-space torque by 6.4 N m per tick.) Where the
-  // coordinate can hardly move in the null space, m_j is capped at 100 / (C_j M^-1 C_j^T)
-  // (mobility at least 1 % of the unconstrained one): a stop the null space cannot reach is not
-  // braked with unbounded torque. Why the brake: the barrier is a potential and cannot
-  // dissipate; with beta = 20 the free-to-stiff switch swings the RHI along its self-motion at up
-  // to 15 rad/s, too fast to stop within the margin with 3 N m, so the arm reached the stop, whose
-  // reaction is not in the null space, and kicked the end effector through the rendered surface
-  // (tests/rhi/rhi_scene_press_test.cpp). Assumed: 2 rad/s (the settled reconfigurations of the
-  // palpation stay below 1 rad/s), 5 ms. limit_speed = 0 turns it off.
-  double limit_speed = 2.0;        // [rad/s]
-  double limit_brake_time = 0.005;  // [s] (5 servo periods at 1 kHz: stable in discrete time for T > dt / 2)
+  // configuration. Where the coordinate can hardly move in the null space, m_j is capped at
+  // 100 / (C_j M^-1 C_j^T) (mobility at least 1 % of the unconstrained one): a stop the null space
+  // cannot reach is not braked with unbounded torque. The barrier is a potential and cannot
+  // dissipate; the brake takes out the self-motion speed (e.g. after a free-to-stiff switch) that
+  // would carry the arm into a stop, whose reaction is not in the null space and pushes the end
+  // effector (docs/rhi.md, "Joint limits": why the brake, and why it is not sized by the
+  // joint-space inertia C_j M C_j^T). Assumed values; limit_speed = 0 turns it off.
+  double limit_speed = 2.0;        // [rad/s], >= 0
+  double limit_brake_time = 0.005;  // [s], > 0 (5 servo periods at 1 kHz: stable in discrete time for T > dt / 2)
   // Null-space torque envelope: tau_N = r(t) min(1, max_null_space_torque / |tau_N,cmd|) tau_N,cmd
   // (Euclidean norm, one scale for the whole vector: its direction is kept, so the FME and
   // joint-limit terms keep their balance), before the actuator-limit fit. r rises as a half cosine,
   // r = (1 - cos(pi s)) / 2 with s = (t - t_0) / null_space_ramp_time, from 0 at the first tick after
   // reset() or after a tick that dropped the null-space torque (a fault) to 1: |tau_N| <= r
   // max_null_space_torque always, and per tick r grows by at most pi dt / (2 null_space_ramp_time).
-  // The primary task J^T (alpha F) is not affected. Why: from the home configuration the FME
-  // gradient asks for 5.4 N m (beta = 20) at the first tick, so an unbounded controller steps the
-  // RHI's actuators from 0 to their 3 N m limit with no contact at all. Defaults: unbounded and no
-  // ramp (0), the paper's controller; the CHAI3D device sets its own (CRedundantPlanarDevice.hpp).
+  // The primary task J^T (alpha F) is not affected. Why: away from the configuration its desired
+  // ellipsoid matches (e.g. the RHI at home, beta = 20) the FME gradient alone can ask for more
+  // than the actuators' limits, so an unbounded controller drives them to their limits with no
+  // contact at all (docs/rhi.md, "In CHAI3D"). Defaults: unbounded and no ramp (0), the paper's
+  // controller; the CHAI3D device sets its own (CPlanarLinkageDevice.hpp).
   double max_null_space_torque = std::numeric_limits<double>::infinity();  // [N m], > 0
   double null_space_ramp_time = 0.0;                                       // [s], >= 0 (0: no ramp)
 };
@@ -205,8 +201,10 @@ class FmeNullSpaceController {
     ramp_start_ = kNever;
   }
 
-  /// One servo tick at time t [s]: joint state (q, q_dot), requested end-effector force F.
-  /// Writes tau (always finite, |tau_i| <= T_i) and returns the fault (also in status()).
+  /// One servo tick at time t [s]: joint state q [rad] and q_dot [rad/s], requested end-effector
+  /// force F [N] in the model's task frame. Writes tau [N m] (always finite, |tau_i| <= T_i) and
+  /// returns the fault (also in status()): kNonFiniteInput or kNonFiniteResult (tau = 0),
+  /// kSingular or kInvalidParameter (primary task only).
   Fault tick(double t, const JointVector& q, const JointVector& qd, const TaskVector& F, JointVector& tau) noexcept;
 
   const Status& status() const noexcept { return status_; }
@@ -390,8 +388,8 @@ Fault FmeNullSpaceController<Model>::tick(double t, const JointVector& q, const 
     // The stiff ellipsoid's major axis follows the contact force, except while the blend back to
     // the free one runs: that starts when the force has fallen (V >= eps2), and as it vanishes
     // (a proxy leaving a surface) its direction is undefined and can turn through 180 deg within
-    // a few ticks, which swept the desired ellipsoid round and stepped the null-space torque by
-    // up to 6.9 N m per tick (CHAI3D cursor released from a mesh, tests/chai3d).
+    // a few ticks, which would sweep the desired ellipsoid round and step the null-space torque
+    // (docs/rhi.md, "In CHAI3D").
     const bool leaving_stiff = transition_.target() == 1.0 && transition_.inProgress();
     if (contact && !leaving_stiff) {
       followContactDirection(t, F);

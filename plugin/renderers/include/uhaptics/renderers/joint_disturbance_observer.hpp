@@ -28,8 +28,9 @@ class JointDisturbanceObserver {
     estimate_.setZero();
     estimate_.segment<6>(6) = q_measured - gains_.joints;
   }
-  /// One servo period: predicted with the torque that acted over it, corrected with the new
-  /// measurement.
+  /// One servo period: predicted with the torque [N m] that acted over it, corrected with the new
+  /// measurement q_measured [rad]. Estimates: velocity() [rad/s], position() [rad], disturbance()
+  /// [N m].
   void update(const Vec6& q_measured, const Vec6& acting) noexcept {
     const Vec<18> predicted = gains_.A * estimate_ + gains_.B * (acting - gains_.torque);
     const Vec6 innovation = q_measured - gains_.joints - predicted.segment<6>(6);

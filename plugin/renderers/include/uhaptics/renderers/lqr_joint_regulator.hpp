@@ -43,12 +43,12 @@ class LqrJointRegulator {
   }
   /// Observer at rest at the measured joints, integrator cleared.
   void reset(const Vec6& q_measured) noexcept;
-  /// Observer update with the new measurement (call once per tick, before control()).
-  /// `applied`: the torque the device reports it applied over the last period (a board echoes the
+  /// Observer update with the new measurement q_measured [rad] (call once per tick, before control()).
+  /// `applied`: the torque [N m] the device reports it applied over the last period (a board echoes the
   /// sequence number of the command it applied); nullptr: inferred from the delay model (the
   /// command of command_delay periods ago, or for a random delay the mean of those it may have been).
   void observe(const Vec6& q_measured, const Vec6* applied = nullptr) noexcept;
-  /// The torque actually commanded this tick (after saturation): queued as a command in flight.
+  /// The torque [N m] actually commanded this tick (after saturation): queued as a command in flight.
   void applied(const Vec6& torque) noexcept {
     head_ = (head_ + 1) % kHistory;
     commands_[head_] = torque;
@@ -56,7 +56,8 @@ class LqrJointRegulator {
   Vec6 velocity() const noexcept { return observer_.velocity(); }
   Vec6 position() const noexcept { return observer_.position(); }
   Vec6 disturbance() const noexcept { return observer_.disturbance(); }
-  /// -Kc e - Ki x_i - Kd (commands in flight - u0) for the error e = (qdot - qdot_ref, q - r).
+  /// -Kc e - Ki x_i - Kd (commands in flight - u0) [N m] for the error e = (qdot - qdot_ref [rad/s],
+  /// q - r [rad]).
   Vec6 control(const Vec<12>& error) const noexcept { return -gains_.Kc * error - gains_.Ki * integral_ - inFlightTerm(); }
   /// x_i += T (r - q) = -T (q - r).
   void integrate(const Vec6& position_error) noexcept { integral_ -= gains_.period * position_error; }

@@ -50,10 +50,11 @@ typedef std::shared_ptr<cExoFingerDevice> cExoFingerDevicePtr;
 
 class cExoFingerDevice : public cUhapticsDevice {
  public:
-  /// Options ("options/exo/..."): coupling_stiffness Z_x [N m/rad], default 1.0; force_loop_lag
+  /// Options ("options/exo/..."): coupling_stiffness Z_x [N m/rad], 0.001..100, default 1.0; force_loop_lag
   /// 1 (default) / 0: the board's force loop as a first-order lag, or ideal; method 0 (default):
   /// paper 000's nonlinear subspace proxy, 1: the standard method it improves on (S J^T F, eq. 1),
-  /// for comparison.
+  /// for comparison. Throws uhaptics::Error when the parameter file or an option is invalid (naming
+  /// it).
   cExoFingerDevice(unsigned int a_deviceNumber, const uhaptics::DeviceSelection& a_selection);
   virtual ~cExoFingerDevice();
   static cExoFingerDevicePtr create(const uhaptics::DeviceSelection& a_selection, unsigned int a_deviceNumber = 0) {

@@ -9,8 +9,8 @@
 // velocity terms) are refreshed once per servo period; the substeps integrate with them frozen
 // (semi-implicit Euler), tracking the tool by first-order kinematics. At the speeds of a wall
 // contact (< 0.1 m/s) the configuration moves < 0.1 mm per period, so freezing them changes the
-// result far less than the encoder quantization (tests/tau/simulated_tau_test.cpp: < 0.1 % of the
-// penetration against a 4x finer refresh; halving the substep changes it by < 2 %).
+// result far less than the encoder quantization (tests/tau/simulated_tau_test.cpp checks both the
+// refresh and the substep; docs/tau.md, "Simulated device", has the figures).
 #include <cstdint>
 #include <Eigen/Cholesky>
 #include <random>
@@ -47,8 +47,12 @@ struct SimulatedTauOptions {
 
 class SimulatedTau {
  public:
+  /// Starts at rest at the model's home joints; keeps a reference to model (it must outlive the
+  /// simulation). Throws uhaptics::Error when an option is out of range (substeps 1..1000 after the
+  /// file's default, max_delay_samples 0..100, negative damping or hand parameters,
+  /// relinearize_tolerance outside [0, 0.1]) or the forward kinematics fails at home.
   SimulatedTau(const TauModel& model, const SimulatedTauOptions& options);
-  /// At rest at joint angles q0 (throws Error if the forward kinematics fails there).
+  /// At rest at joint angles q0 [rad] (throws Error if the forward kinematics fails there).
   void reset(const Vec6& q0);
 
   /// Hand attached with position/velocity/acceleration at the start of the next period (the hand
@@ -56,8 +60,8 @@ class SimulatedTau {
   void setHand(const Vec3& position, const Vec3& velocity, const Vec3& acceleration) noexcept;
   void detachHand() noexcept { hand_attached_ = false; }
 
-  /// One servo period with command tau (saturated here) and an external tool force held constant
-  /// over the period. Returns a Fault if the model fails: before the period, the state is left
+  /// One servo period with command tau [N m] (saturated here) and an external tool force [N] held
+  /// constant over the period. Returns a Fault if the model fails: before the period, the state is left
   /// unchanged; at its end (the joints would leave the range where the mechanism assembles), the
   /// joints stay where they were and stop, as against a geometric stop, and time advances.
   Fault step(const Vec6& tau_command, const Vec3& external_force) noexcept;

@@ -22,9 +22,12 @@ class TauBoardPlant final : public HeldTorquePlant<6> {
     // The simulated handle's rotational damping [N m s/rad], as cTauDevice's default: the hand holds
     // only the tool's position, and the host's command arrives 1-2 sample periods after the reading
     // it was computed from (COMMAND/STATE exchange), which the undamped orientation does not
-    // tolerate (0.38 rad in 3 s with a 1-period delay, divergence with 2; README "Hardware path").
+    // tolerate: it drifts, and diverges with a 2-period delay (docs/hardware.md, "Why the emulated
+    // TAU board damps the handle"). >= 0.
     double tool_rotational_damping = 0.01;
   };
+  /// Starts at rest at the model's home joints. Throws uhaptics::Error on invalid options (see
+  /// SimulatedTau) or when the model does not assemble at home.
   TauBoardPlant(TauModel model, const Options& options);
   void advance(double dt) noexcept override;
   bool readUserPoint(Vec3& position, Vec3& velocity) noexcept override {

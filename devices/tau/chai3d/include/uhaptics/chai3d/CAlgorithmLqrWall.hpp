@@ -26,6 +26,7 @@ namespace chai3d {
 class cAlgorithmLqrWall : public cAlgorithmFingerProxy {
  public:
   /// a_tool: the tool whose frame maps world to device coordinates (the haptic point's parent).
+  /// Throws uhaptics::Error when either is null.
   cAlgorithmLqrWall(cGenericTool* a_tool, const cTauDevicePtr& a_device);
   virtual ~cAlgorithmLqrWall();
 

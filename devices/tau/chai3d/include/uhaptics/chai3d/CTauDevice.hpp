@@ -58,6 +58,8 @@ class cTauDevice : public cUhapticsDevice {
   /// 3000; contact_force [N] where a contact starts, 0.01..10, default 0.3; release_time [s] out of
   /// contact before the wall lets go, 0.001..1, default 0.05; tool_damping [N s/m], default 0;
   /// tool_rotational_damping [N m s/rad], default 0.01 (simulated handle).
+  /// Throws uhaptics::Error when the parameter file or an option is invalid (naming it), the file's
+  /// servo period is not 1 ms, or the LQR wall's design fails.
   cTauDevice(unsigned int a_deviceNumber, const uhaptics::DeviceSelection& a_selection);
   virtual ~cTauDevice();
   static cTauDevicePtr create(const uhaptics::DeviceSelection& a_selection, unsigned int a_deviceNumber = 0) {

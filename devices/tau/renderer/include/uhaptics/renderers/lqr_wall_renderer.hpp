@@ -15,8 +15,8 @@ namespace uhaptics {
 class LqrWallRenderer {
  public:
   struct Options {
-    // Release when the tool is this far above the surface: about two encoder counts at the tool, so
-    // quantization alone never releases a held contact.
+    // Release when the tool is this far above the surface [m], >= 0: about two encoder counts at
+    // the tool, so quantization alone never releases a held contact.
     double release_distance = 2e-4;
     bool gravity_compensation = true;
     // true: the reference follows the tool along the surface (the tool slides, only the normal
@@ -29,18 +29,21 @@ class LqrWallRenderer {
     // gain, so the contact force bends away from the normal). true: the contact torque is scaled
     // down as a whole until gravity compensation plus it fit the torque limits, so the wall pushes
     // less hard but still along its normal (for a tool the user moves freely along the surface,
-    // where a bent force pushes it sideways: tests/tau, 14 N into a wall tilted 30 deg is held at
-    // 0.5 mm with it and lost without it).
+    // where a bent force pushes it sideways; docs/tau.md, "Velocity observer and sliding").
     bool keep_direction = false;
   };
+  /// Keeps a reference to model (it must outlive the renderer); gains from designLqrWall. Throws
+  /// uhaptics::Error on a negative release_distance or non-finite gains.
   LqrWallRenderer(const TauModel& model, const LqrWallGains& gains, const Options& options);
   LqrWallRenderer(const TauModel& model, const LqrWallGains& gains) : LqrWallRenderer(model, gains, Options{}) {}
   void reset() noexcept;
   /// Swap in gains designed at a new operating point (e.g. each new contact), keeping the state.
   void setGains(const LqrWallGains& gains) noexcept { regulator_.setGains(gains); }
+  /// One servo period: encoder reading q [rad], the environment's contact (model frame, [m]).
   /// pose: the caller's forward-kinematics result for q (nullptr: computed here).
-  /// applied: the torque the device reports it applied over the last period (nullptr: unknown; the
-  /// observer then infers it from the delay model, see LqrJointRegulator::observe).
+  /// applied: the torque [N m] the device reports it applied over the last period (nullptr: unknown;
+  /// the observer then infers it from the delay model, see LqrJointRegulator::observe).
+  /// Returns the command (torque [N m], finite and within the limits; zero with a fault on bad input).
   const WallCommand& tick(const Vec6& q, const SurfaceContact& contact, const Vec6* pose = nullptr,
                           const Vec6* applied = nullptr) noexcept;
   /// The same tick from forward kinematics the caller already solved for q (TauModel::forward(q,

@@ -12,12 +12,15 @@ class SpringWallRenderer {
  public:
   struct Options {
     double stiffness = 6000.0;  // N/m, paper 001's baseline
-    double damping = 0.0;       // rendered damping B_r (paper: 0, device damping 4 Ns/m instead)
+    double damping = 0.0;       // N s/m, rendered damping B_r (paper: 0, device damping 4 Ns/m instead)
     bool gravity_compensation = true;
   };
+  /// Keeps a reference to model (it must outlive the renderer). Throws uhaptics::Error unless
+  /// stiffness and damping are finite and >= 0.
   SpringWallRenderer(const TauModel& model, const Options& options);
   explicit SpringWallRenderer(const TauModel& model) : SpringWallRenderer(model, Options{}) {}
   void reset() noexcept;
+  /// One servo period: encoder reading q [rad], the environment's contact (model frame, [m]).
   /// pose: the caller's forward-kinematics result for q (nullptr: computed here).
   const WallCommand& tick(const Vec6& q, const SurfaceContact& contact, const Vec6* pose = nullptr) noexcept;
   /// The same tick from forward kinematics the caller already solved for q (TauModel::forward(q,

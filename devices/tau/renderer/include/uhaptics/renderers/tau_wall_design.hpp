@@ -7,12 +7,14 @@
 
 namespace uhaptics {
 
-/// LQR weights: Q = diag(velocity I6, position I6, integral I6), R = torque I6.
-/// Defaults: tuned for our assumed TAU-class plant (README, TAU section). Paper 001's own weights
-/// (1, 1e3, 1e7, 1) give a joint stiffness of only ~60 N m/rad on this plant, so a 15 N push at the
-/// tool (up to 0.37 N m per joint at the centre) deflects 0.006 rad, six times the 0.001 rad
-/// requirement; we raise position and integral weights by 1e3 (keeping the paper's integral/position
-/// ratio 1e4) and set the velocity weight so the fastest pole stays near the paper's ~2480 rad/s.
+/// LQR weights: Q = diag(velocity I6, position I6, integral I6), R = torque I6, per unit squared of
+/// the augmented state (qdot [rad/s], q [rad], integral of r - q [rad s]) and of the torque [N m].
+/// velocity, position >= 0; integral, torque > 0 (designLqrWall throws otherwise).
+/// Defaults: for our assumed TAU-class plant, paper 001's position and integral weights raised by
+/// 1e3 (the paper's integral/position ratio 1e4 kept) to meet its 0.001 rad joint deflection
+/// requirement under a 15 N push (with state feedback), and the velocity weight set so the fastest
+/// pole stays near the paper's ~2480 rad/s (docs/tau.md, "LQR weights": why the paper's own
+/// weights fall short on this plant).
 struct LqrWallWeights {
   double velocity = 1.1;
   double position = 1e6;
@@ -23,12 +25,13 @@ struct LqrWallWeights {
 };
 
 /// Noise levels the observer (JointDisturbanceObserver: qdot, q and the disturbance torque d from
-/// the quantized encoders) is designed for.
+/// the quantized encoders) is designed for; the process noises must be > 0 (designLqrWall throws
+/// otherwise).
 struct ObserverNoise {
   double velocity_process = 1e-3;  // rad/s per sample (unmodelled accelerations)
-  // N m per sample: how fast the user's push may change. Measured against 0.005 (README, TAU
-  // section): the study's undelayed wall sinks 0.09 instead of 0.19 mm, and a 15 N step through the
-  // observer on the encoders deflects 0.0023 instead of 0.0044 rad.
+  // N m per sample: how fast the user's push may change (the disturbance state's random walk). A
+  // smaller value makes the observer slower to take up a push, so the wall sinks deeper and a force
+  // step deflects the joints further (docs/tau.md, "Observer tuning").
   double disturbance_process = 0.05;
   double position_process = 1e-7;  // rad per sample (keeps the filter DARE well posed)
   double quantization = 0.0;       // encoder std (rad); 0: resolution / sqrt(12) of the model

@@ -33,7 +33,8 @@ class TauServoFrontEnd {
  public:
   explicit TauServoFrontEnd(const TauModel& model);
   void reset() noexcept;
-  /// Returns kNone or the fault that forces a zero command.
+  /// Per servo period, encoder reading q [rad]: kNone, or the fault that forces a zero command
+  /// (kNonFiniteInput also for an active contact whose normal is not a unit vector).
   Fault update(const Vec6& q, const SurfaceContact& contact, const Vec6* pose) noexcept;
   /// The same from forward kinematics the caller already solved for q (TauModel::forward(q, solved)
   /// returned kNone): its pose and Jacobian are taken as they are, the model is not evaluated again.
