@@ -2,7 +2,7 @@
 """The installed package as a new user consumes it, with the CHAI3D it ships or refers to.
 
   chai3d_package_test.py [--cmake CMAKE] [--ninja NINJA] --build DIR --work DIR --consumer DIR --chai3d-source DIR
-                         --forbid PATH... [--allow PATH...] [--cmake-arg ARG...] [--run PROGRAM=DEVICE...]
+                         --forbid PATH... [--cmake-arg ARG...] [--run PROGRAM=DEVICE...]
 
 1. cmake --install <build> --prefix <work>/prefix.
 2. The installation holds no symbolic link that leads nowhere or out of the prefix (system libraries
@@ -11,10 +11,10 @@
    CHAI3D's GLFW application template, both copied unchanged from CHAI3D's source tree, is configured
    with CMAKE_PREFIX_PATH=<prefix> as its only hint and built.
 4. Nothing the consumer's build recorded (build.ninja, compile_commands.json, the compiler's header
-   dependencies as `ninja -t deps` lists them, CMakeCache.txt) names a path under a --forbid folder (this build
-   tree, the uhaptics sources, the CHAI3D that uhaptics built) unless it lies under an --allow folder
-   (the work folder, a CHAI3D the user gave). So the consumer compiles against the installed headers
-   and links the installed libraries and the system's.
+   dependencies as `ninja -t deps` lists them, CMakeCache.txt) names a path under a --forbid folder
+   (this build tree, the uhaptics sources, the CHAI3D that uhaptics built) outside the work folder.
+   So the consumer compiles against the installed headers and links the installed libraries and the
+   system's (and a CHAI3D the user gave, where it is).
 5. Each program runs for a few seconds under a private Xvfb with a simulated uhaptics device
    (UHAPTICS_DEVICE, UHAPTICS_BACKEND=sim), and the device's statistics file must show that
    device served the program's haptic loop.
@@ -95,9 +95,9 @@ def build_consumer(args, prefix, source, binary):
 
 
 def check_paths(args, binary):
-    """Every path the consumer's build recorded under a forbidden folder must be under an allowed one."""
+    """Every path the consumer's build recorded under a forbidden folder must lie in the work folder."""
     forbid = [os.path.realpath(p) for p in args.forbid]
-    allow = [os.path.realpath(p) for p in (args.allow or [])] + [os.path.realpath(args.work)]
+    allow = [os.path.realpath(args.work)]
     # The headers each object was compiled from, as the compiler reported them to ninja.
     deps = subprocess.run([args.ninja, "-C", binary, "-t", "deps"], stdout=subprocess.PIPE, check=True).stdout
     files = ["build.ninja", "compile_commands.json", "CMakeCache.txt", "ninja -t deps"]
@@ -229,7 +229,6 @@ def main():
     parser.add_argument("--consumer", required=True, help="folder of the consumer's CMakeLists.txt")
     parser.add_argument("--chai3d-source", required=True, help="CHAI3D's source tree")
     parser.add_argument("--forbid", action="append", required=True)
-    parser.add_argument("--allow", action="append")
     parser.add_argument("--cmake-arg", action="append", help="passed to the consumer's configure")
     parser.add_argument("--run", action="append", default=[], help="PROGRAM=DEVICE")
     args = parser.parse_args()
