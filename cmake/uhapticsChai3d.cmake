@@ -16,7 +16,8 @@
 # sanitizers links into the sanitized uhaptics builds as any uninstrumented library does.
 #
 # uhaptics_provide_chai3d() sets CHAI3D_DIR (the build tree to find_package from; a normal variable,
-# so the cache keeps what the user gave) and UHAPTICS_CHAI3D_ORIGIN (for the configure message).
+# so the cache keeps what the user gave), UHAPTICS_CHAI3D_ORIGIN (for the configure message) and
+# UHAPTICS_CHAI3D_BUILT (true when the CHAI3D is uhaptics' own build, which the installation ships).
 
 set(UHAPTICS_CHAI3D_VERSION 3.3.0)
 set(UHAPTICS_CHAI3D_REPOSITORY "https://github.com/chai3d/chai3d.git")
@@ -132,8 +133,10 @@ endfunction()
 function(uhaptics_provide_chai3d)
   if(CHAI3D_DIR)
     set(UHAPTICS_CHAI3D_ORIGIN "the CHAI3D build given by CHAI3D_DIR" PARENT_SCOPE)
+    set(UHAPTICS_CHAI3D_BUILT FALSE PARENT_SCOPE)
     return()
   endif()
+  set(UHAPTICS_CHAI3D_BUILT TRUE PARENT_SCOPE)
 
   set(_cache "${UHAPTICS_CHAI3D_CACHE}")
   file(MAKE_DIRECTORY "${_cache}")
@@ -188,4 +191,91 @@ function(uhaptics_provide_chai3d)
   file(WRITE "${_stamp}" "${_id}")
   set(CHAI3D_DIR "${_build}" PARENT_SCOPE)
   set(UHAPTICS_CHAI3D_ORIGIN "CHAI3D built by uhaptics from ${_id}" PARENT_SCOPE)
+endfunction()
+
+# uhaptics_chai3d_link_items(): what linking CHAI3D takes, read from chai3dConfig.cmake's
+# CHAI3D_LIBRARIES, in a form that holds both in this build and in the installed package. CHAI3D's
+# own libraries (its archive and the Force Dimension SDK it ships, libdrd.a) are files. The rest are
+# system libraries, which a consumer must find on its own machine: GL, GLU, pthread and ALSA become
+# the imported targets of CMake's find modules (found here, at the top level, so every folder sees
+# them; the installed uhapticsConfig.cmake finds them again), libusb the pkg-config target
+# uhaptics::protocol uses, and any other name (rt, dl) stays a name for the linker. Sets:
+#   UHAPTICS_CHAI3D_OWN_LIBRARIES     CHAI3D's own library files, in link order
+#   UHAPTICS_CHAI3D_SYSTEM_LIBRARIES  the system libraries as targets or names, in link order
+#   UHAPTICS_CHAI3D_PACKAGES          the find modules those targets come from
+#   UHAPTICS_CHAI3D_SYSTEM_TARGETS    the targets among them
+function(uhaptics_chai3d_link_items)
+  set(_archive "")
+  foreach(_config RELEASE RELWITHDEBINFO MINSIZEREL DEBUG NOCONFIG)
+    get_target_property(_location chai3d IMPORTED_LOCATION_${_config})
+    if(_location AND NOT _archive)
+      set(_archive "${_location}")
+    endif()
+  endforeach()
+  if(NOT EXISTS "${_archive}")
+    message(FATAL_ERROR "uhaptics: CHAI3D's config in ${chai3d_DIR} names no built library: build CHAI3D "
+                        "first (its target 'chai3d')")
+  endif()
+  set(_own "")
+  set(_system "")
+  set(_packages "")
+  foreach(_lib IN LISTS CHAI3D_LIBRARIES)
+    if(_lib STREQUAL "chai3d")
+      list(APPEND _own "${_archive}")
+      continue()
+    elseif(_lib STREQUAL "drd")  # Force Dimension's prebuilt static SDK, referenced by CDeltaDevices
+      find_library(UHAPTICS_CHAI3D_DRD NAMES libdrd.a drd PATHS ${CHAI3D_LIBRARY_DIRS} NO_DEFAULT_PATH REQUIRED)
+      list(APPEND _own "${UHAPTICS_CHAI3D_DRD}")
+      continue()
+    endif()
+    if(IS_ABSOLUTE "${_lib}")
+      set(_inside FALSE)
+      foreach(_tree IN ITEMS "${CHAI3D_SOURCE_DIR}" "${chai3d_DIR}")
+        string(FIND "${_lib}" "${_tree}/" _at)
+        if(_tree AND _at EQUAL 0)
+          set(_inside TRUE)
+        endif()
+      endforeach()
+      if(_inside)
+        list(APPEND _own "${_lib}")
+        continue()
+      endif()
+      get_filename_component(_name "${_lib}" NAME)
+      string(REGEX REPLACE "^lib|\\.(so|a)(\\.[0-9.]*)?$" "" _name "${_name}")
+    else()
+      string(REGEX REPLACE "^-l" "" _name "${_lib}")
+    endif()
+    if(_name MATCHES "^(GL|OpenGL)$")
+      find_package(OpenGL REQUIRED)
+      list(APPEND _system OpenGL::GL)
+      list(APPEND _packages OpenGL)
+    elseif(_name STREQUAL "GLU")
+      find_package(OpenGL REQUIRED)
+      if(NOT TARGET OpenGL::GLU)
+        message(FATAL_ERROR "uhaptics: CHAI3D links GLU, which is not installed (Debian: libglu1-mesa-dev)")
+      endif()
+      list(APPEND _system OpenGL::GLU)
+      list(APPEND _packages OpenGL)
+    elseif(_name STREQUAL "pthread")
+      find_package(Threads REQUIRED)
+      list(APPEND _system Threads::Threads)
+      list(APPEND _packages Threads)
+    elseif(_name STREQUAL "asound")
+      find_package(ALSA REQUIRED)
+      list(APPEND _system ALSA::ALSA)
+      list(APPEND _packages ALSA)
+    elseif(_name STREQUAL "usb-1.0")
+      list(APPEND _system PkgConfig::LIBUSB)  # devices/protocol finds it; so does uhapticsConfig.cmake
+    else()
+      list(APPEND _system "${_name}")
+    endif()
+  endforeach()
+  list(REMOVE_DUPLICATES _system)
+  list(REMOVE_DUPLICATES _packages)
+  set(_targets "${_system}")
+  list(FILTER _targets INCLUDE REGEX "::")
+  set(UHAPTICS_CHAI3D_OWN_LIBRARIES "${_own}" PARENT_SCOPE)
+  set(UHAPTICS_CHAI3D_SYSTEM_LIBRARIES "${_system}" PARENT_SCOPE)
+  set(UHAPTICS_CHAI3D_PACKAGES "${_packages}" PARENT_SCOPE)
+  set(UHAPTICS_CHAI3D_SYSTEM_TARGETS "${_targets}" PARENT_SCOPE)
 endfunction()
