@@ -29,6 +29,10 @@ import subprocess
 import sys
 import time
 
+# The drop-in runner's private Xvfb server: one place knows how to start and stop it.
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "examples", "chai3d-unchanged"))
+from run_examples import Display  # noqa: E402
+
 SECONDS = 3.0  # [s] each program runs
 # The consumer's sources: (file name in the consumer, path in CHAI3D's source tree).
 SOURCES = [("01-mydevice.cpp", "examples/GLFW/01-mydevice/01-mydevice.cpp"),
@@ -124,41 +128,6 @@ def check_paths(args, binary):
         fail(f"the consumer's build reaches into {len(shown)} paths outside the installation:\n  " +
              "\n  ".join(shown[:30]))
     print(f"the consumer's {', '.join(files)} name nothing under {', '.join(forbid)} outside {', '.join(allow)}")
-
-
-class Display:
-    """A private Xvfb server (a free display number chosen by Xvfb itself)."""
-
-    def __init__(self):
-        xvfb = shutil.which("Xvfb")
-        if xvfb is None:
-            fail("Xvfb not found (apt-get install xvfb)")
-        read_fd, write_fd = os.pipe()
-        self.proc = subprocess.Popen(
-            [xvfb, "-displayfd", str(write_fd), "-screen", "0", "1280x960x24", "-nolisten", "tcp"],
-            pass_fds=(write_fd,), stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
-        os.close(write_fd)
-        number = b""
-        deadline = time.monotonic() + 20
-        while not number.endswith(b"\n") and time.monotonic() < deadline:
-            chunk = os.read(read_fd, 16)
-            if not chunk:
-                break
-            number += chunk
-        os.close(read_fd)
-        if not number.strip():
-            self.close()
-            fail("Xvfb did not start")
-        self.name = ":" + number.decode().strip()
-
-    def close(self):
-        if self.proc.poll() is None:
-            self.proc.terminate()
-            try:
-                self.proc.wait(5)
-            except subprocess.TimeoutExpired:
-                self.proc.kill()
-                self.proc.wait()
 
 
 def run_program(exe, device, out):
