@@ -105,7 +105,10 @@ TEST_CASE("a servo tick through the CHAI3D call allocates nothing", "[chai3d][de
 }
 
 TEST_CASE("real-time mode: servo ticks follow the wall clock, not the call rate", "[chai3d][device]") {
-  PointMassDevice device(fixtureSelection());
+  auto selection = fixtureSelection();
+  selection.options["pace"] = 0.0;  // the application's loop spins as fast as it can
+  PointMassDevice device(selection);
+  REQUIRE_FALSE(device.getPaced());
   REQUIRE(device.open());
   const auto start = std::chrono::steady_clock::now();
   std::uint64_t calls = 0;
@@ -120,6 +123,26 @@ TEST_CASE("real-time mode: servo ticks follow the wall clock, not the call rate"
   CHECK(static_cast<double>(stats.ticks) <= elapsed / 1e-3 + 1.0);
   CHECK(static_cast<double>(stats.ticks) >= 0.5 * elapsed / 1e-3);
   CHECK(calls > stats.ticks);  // the application loop spins faster than the servo: commands held
+}
+
+TEST_CASE("paced (the default): each force command waits for the next servo period", "[chai3d][device]") {
+  PointMassDevice device(fixtureSelection());
+  REQUIRE(device.getPaced());
+  REQUIRE(device.open());
+  const auto start = std::chrono::steady_clock::now();
+  std::uint64_t calls = 0;
+  while (std::chrono::steady_clock::now() - start < std::chrono::milliseconds(200)) {
+    device.setForce(cVector3d(0, 0, 0));
+    ++calls;
+  }
+  const double elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  const auto stats = device.getSessionStats();
+  // A spinning loop makes thousands of calls per tick; paced, one call per period and one tick per
+  // call, give or take the ticks a descheduled loop catches up on (at least half, as above).
+  CHECK(static_cast<double>(stats.ticks) <= elapsed / 1e-3 + 1.0);
+  CHECK(static_cast<double>(stats.ticks) >= 0.5 * elapsed / 1e-3);
+  CHECK(static_cast<double>(calls) <= 1.2 * elapsed / 1e-3 + 2.0);
+  CHECK(calls <= stats.ticks + 2);
 }
 
 TEST_CASE("the scripted hand moves the device along its path", "[chai3d][hand]") {

@@ -42,7 +42,8 @@ cUhapticsDevice::cUhapticsDevice(unsigned int a_deviceNumber, const uhaptics::De
       m_selection(a_selection),
       m_servoPeriod(a_servoPeriod),
       m_servoThreadRenders(a_selection.backend != "sim"),
-      m_staleTime(a_selection.option("stale_time", 0.06, 0.001, 1.0)),
+      m_staleTime(a_selection.option("stale_time", 0.01, 0.001, 1.0)),
+      m_paced(a_selection.option("pace", 1.0, 0.0, 1.0) != 0.0),
       m_handEnabled(a_selection.hand_enabled && a_selection.backend != "usb"),
       m_joints(a_joints),
       m_actuators(a_actuators),
@@ -456,6 +457,7 @@ void cUhapticsDevice::publishStateLocked() noexcept {
   p.link = m_linkStatus;
   p.fault = m_lastFault;
   p.sensed = !m_servoFirst || m_ticks > 0;
+  p.stampNs = steadyNs();
   m_stateExchange.write(p);
 }
 
@@ -593,10 +595,32 @@ bool cUhapticsDevice::setForceAndTorqueAndGripperForce(const cVector3d& a_force,
     input.stampNs = steadyNs();
     input.sequence = ++m_inputSequence;
     m_inputExchange.write(input);
+    if (m_paced) {
+      // The servo thread's next period: one period after its latest publication, plus a margin
+      // for its read, render and publish.
+      const auto published = Clock::time_point(std::chrono::nanoseconds(m_published.stampNs));
+      const auto due = published + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(m_servoPeriod)) +
+                       std::chrono::microseconds(50);
+      lock.unlock();
+      waitForNextPeriod(due);
+    }
   } else if (finite) {
     advanceLocked(m_lockStep);
+    if (m_paced && !m_lockStep) {
+      const auto due = m_origin + std::chrono::duration_cast<Clock::duration>(
+                                      std::chrono::duration<double>(static_cast<double>(m_ticks + 1) * m_servoPeriod));
+      lock.unlock();
+      waitForNextPeriod(due);
+    }
   }
   return finite ? m_deviceReady : C_ERROR;
+}
+
+void cUhapticsDevice::waitForNextPeriod(Clock::time_point a_due) const noexcept {
+  // Never longer than one period: a late or stopped servo thread does not hold the application.
+  const auto now = Clock::now();
+  const auto longest = now + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(m_servoPeriod));
+  if (a_due > now) std::this_thread::sleep_until(std::min(a_due, longest));
 }
 
 bool cUhapticsDevice::enableForces(bool a_value) {

@@ -16,7 +16,7 @@
 //    application's haptic thread only publishes what the scene asks for (force, torque, the
 //    position it computed them from), time-stamped, and reads back the state; both through
 //    wait-free triple buffers, so neither thread waits for the other. Input older than the stale
-//    time (option "stale_time", default 60 ms; no setForce() since) is a fault like a lost link:
+//    time (option "stale_time", default 10 ms; no setForce() since) is a fault like a lost link:
 //    readingLost() ends the contact (the TAU's LQR wall lets go), the efforts ramp linearly to zero
 //    over kStaleRampPeriods periods, the statistics count it, and rendering resumes with the next
 //    publication.
@@ -25,6 +25,10 @@
 //    the application's loop rate (at most kMaxCatchUpTicks per call: a stalled loop does not
 //    trigger a burst of simulation); in lock-step mode every setForceAndTorqueAndGripperForce()
 //    call is exactly one tick (deterministic, for tests).
+//
+// Paced (option "pace", default on; every backend but lock-step): setForceAndTorqueAndGripperForce()
+// returns when the next servo period begins, as a hardware driver returns after its device's next
+// bus frame. CHAI3D's haptic loop then runs at the servo rate instead of spinning a core.
 //
 // On every backend the policy sees the joints as the sensors give them (the simulated encoders
 // quantize like the board's) and rates from one estimator (JointRateEstimator over the device's
@@ -110,7 +114,9 @@ class cUhapticsDevice : public cGenericHapticDevice {
   virtual bool getUserSwitches(unsigned int& a_userSwitches);
   /// The force [N] and torque [N m] to render, device frame; the gripper force is ignored. A
   /// non-finite value renders zero, counts as a fault (getSessionStats()) and returns C_ERROR, as
-  /// does a call while closed. On sim it also advances the simulation (see above).
+  /// does a call while closed. On sim it also advances the simulation (see above). Paced (option
+  /// "pace", default 1; not in lock-step): returns when the device's next servo period begins, at
+  /// most one period later, as a hardware driver returns after the device's next bus frame.
   virtual bool setForceAndTorqueAndGripperForce(const cVector3d& a_force, const cVector3d& a_torque,
                                                 double a_gripperForce);
   /// false: the servo ticks render zero force and torque until re-enabled. Always C_SUCCESS.
@@ -151,10 +157,13 @@ class cUhapticsDevice : public cGenericHapticDevice {
   /// the application's calls (sim).
   bool rendersInServoThread() const { return m_servoThreadRenders; }
   /// Board backends: how long the application's input may go unpublished before the efforts ramp
-  /// to zero [s] (option "stale_time", 0.001..1, default 0.06: longer than the 50 ms a stock Linux
-  /// kernel suspends a busy SCHED_FIFO thread such as CHAI3D's haptic loop every second,
-  /// sched_rt_runtime_us = 950000 of 1000000, which is no stall of the application).
+  /// to zero [s] (option "stale_time", 0.001..1, default 0.01: ten periods at 1 kHz, room for a
+  /// scene's slow collision query; a paced haptic loop is not throttled by the kernel, see getPaced()).
   double getStaleTime() const { return m_staleTime; }
+  /// Whether setForceAndTorqueAndGripperForce() waits for the next servo period (option "pace",
+  /// default 1). CHAI3D's haptic loop then runs at the device's rate instead of spinning a core at
+  /// SCHED_FIFO, which the kernel's real-time throttling would suspend for 50 ms of every second.
+  bool getPaced() const { return m_paced; }
 
  protected:
   /// a_servoPeriod [s]: the device's control period (its board's rate). a_joints, a_actuators: what
@@ -266,6 +275,7 @@ class cUhapticsDevice : public cGenericHapticDevice {
     uhaptics::LinkStatus link;
     uhaptics::Fault fault;
     bool sensed;  // a reading has been sensed this session
+    std::int64_t stampNs;  // steady clock, when the servo thread published it
   };
 
   void advanceLocked(bool a_oneTick) noexcept;
@@ -284,6 +294,8 @@ class cUhapticsDevice : public cGenericHapticDevice {
   void servoTick(const uhaptics::DeviceSnapshot& a_snapshot, double* a_efforts) noexcept;
   void servoNoReading(const uhaptics::DeviceSnapshot& a_snapshot) noexcept;
   void publishStateLocked() noexcept;
+  /// Paced: sleep (no lock held) until the next servo period begins, at most one period.
+  void waitForNextPeriod(Clock::time_point a_due) const noexcept;
   // Board backends, application side (m_appMutex held): the newest published state.
   void pullStateLocked() noexcept;
   /// The state the application reads, with the lock that guards it: m_mutex on sim (after
@@ -299,6 +311,7 @@ class cUhapticsDevice : public cGenericHapticDevice {
   const double m_servoPeriod;
   const bool m_servoThreadRenders;  // emulated, usb
   const double m_staleTime;         // [s]
+  const bool m_paced;               // setForce...() waits for the next servo period
   bool m_lockStep = false;
   bool m_forcesEnabled = true;
   bool m_handEnabled;
