@@ -82,6 +82,7 @@ TEST_CASE("joint I/O, sim: each device's renderer drives its simulation, command
     io->open();
     REQUIRE(io->isOpen());
     CHECK(io->describe() == c.name() + ", sim");
+    CHECK(io->commandDelayPeriods() == 0);  // read after the step, commanded before the next
     Driver driver(c);
     double q[wire::kMaxChannels], q0[wire::kMaxChannels];
     REQUIRE(io->read(q0));
@@ -130,6 +131,7 @@ TEST_CASE("joint I/O, emulated: the same renderer through the servo loop and the
     REQUIRE(io->isOpen());
     REQUIRE(io->servoLoop() != nullptr);
     CHECK(io->describe().find("in-process board emulator") != std::string::npos);
+    CHECK(io->commandDelayPeriods() == 1);  // each STATE answers the previous period's COMMAND
     double q[wire::kMaxChannels];
     bool got = false;
     for (int k = 0; k < 5000 && !got; ++k) {  // the first STATE: milliseconds, seconds when sanitized

@@ -156,6 +156,10 @@ TEST_CASE("normal operation: each device through its renderer at 1 kHz for 3 s, 
       CHECK(static_cast<double>(k.ticks) > 0.5 * 3.0 * cfg.rate_hz);
       CHECK(timing.period.p50_us == Approx(1000.0).epsilon(0.5));
       CHECK(zero_commands < snapshots / 10);  // the renderer was driving the device, not idling
+      // The phase lock put COMMANDs in the middle of the board's sample period (whatever the phase
+      // the two clocks started with): the command delay is one period with room for jitter.
+      const double sample_period_us = 1e6 / c.spec.sample_rate_hz;
+      CHECK(std::abs(rig.loop.sampleAgeUs() - 0.5 * sample_period_us) < 0.2 * sample_period_us);
     }
     // The simulation moved: the exoskeleton's finger flexes by itself; the TAU and the RHI move
     // under the renderer's torques against the hand (at least an encoder count on some joint).

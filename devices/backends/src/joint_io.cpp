@@ -144,6 +144,7 @@ class ServoJointIo final : public JointIo {
     loop_->request(r);  // the servo loop's safety stage checks it before it leaves the host
   }
   Fault advance(double) noexcept override { return Fault::kNone; }
+  int commandDelayPeriods() const noexcept override { return ServoLoop::kCommandDelayPeriods; }
   bool readUserPoint(Vec3& position, Vec3& velocity) noexcept override {
     return emulator_ != nullptr && emulator_->readUserPoint(position, velocity);
   }

@@ -211,6 +211,7 @@ ServoLoop::HandshakeResult ServoLoop::handshake(int timeout_us, wire::DeviceInfo
       return status == TransportStatus::kDisconnected ? HandshakeResult::kDisconnected : HandshakeResult::kNoAnswer;
   } while (rx_frame_.info.nonce != nonce);
   info = rx_frame_.info;
+  sample_period_ns_ = info.sample_rate_hz > 0 ? static_cast<std::int64_t>(std::llround(1e9 / info.sample_rate_hz)) : 0;
   if (info.selected_version == 0 || info.selected_version != device_.protocol_version)
     return HandshakeResult::kVersionMismatch;
   if (rx_frame_.device != device_.type || info.joint_count != device_.joints ||
@@ -338,6 +339,8 @@ void ServoLoop::run() noexcept {
       }
     }
     tick();
+    deadline += phase_shift_ns_;
+    phase_shift_ns_ = 0;
   }
   if (link_ == LinkState::kRunning) sendZero();  // leave the device unpowered on close
   // Readers must not take the last reading for a live one once nothing runs.
@@ -452,9 +455,10 @@ void ServoLoop::runningTick() noexcept {
     fresh = true;
   }
 
-  // 2. Host watchdog and board status.
+  // 2. Host watchdog, board status and the phase lock.
   if (fresh) {
     bump(counters_.states);
+    lockPhase();
     consecutive_missed_ = 0;
     if (last_state_.error != last_board_error_) {
       if (last_state_.error != wire::BoardError::kNone)
@@ -480,6 +484,22 @@ void ServoLoop::runningTick() noexcept {
                                 watchdog_tripped_ ? wire::CommandMode::kZero : wire::CommandMode::kEffort,
                                 command_.data(), device_.actuators);
   sendFrame(tx_frame_);
+}
+
+void ServoLoop::lockPhase() noexcept {
+  // The sample's age when the previous COMMAND arrived; unsigned difference: the clock wraps.
+  const std::int64_t age_ns =
+      static_cast<std::int64_t>(static_cast<std::uint32_t>(last_state_.board_time_us - last_state_.sample_time_us[0])) * 1000;
+  // Reported as a mean over about 50 periods (single writer), so jitter does not hide the phase.
+  const double previous = sample_age_us_.load(std::memory_order_relaxed);
+  const double age_us = static_cast<double>(age_ns) * 1e-3;
+  sample_age_us_.store(previous == 0.0 ? age_us : previous + 0.02 * (age_us - previous), std::memory_order_relaxed);
+  if (!config_.phase_lock || sample_period_ns_ <= 0 || age_ns >= sample_period_ns_) return;
+  // A proportional step of 1/8 of the error, slewed to 2 % of a period so that locking never looks
+  // like a missed deadline; an older sample means the command comes late in the board's period.
+  const std::int64_t error = age_ns - sample_period_ns_ / 2;
+  const std::int64_t slew = period_ns_ / 50;
+  phase_shift_ns_ -= std::clamp<std::int64_t>(error / 8, -slew, slew);
 }
 
 void ServoLoop::computeCommand(bool fresh) noexcept {
@@ -574,6 +594,7 @@ std::string ServoLoop::summary() const {
   for (std::size_t i = 1; i < c.rejected_by_reason.size(); ++i)
     if (c.rejected_by_reason[i] > 0)
       s << "  rejected (" << wire::toString(static_cast<wire::Reject>(i)) << "): " << c.rejected_by_reason[i] << "\n";
+  s << "  board sample age at COMMAND " << sampleAgeUs() << " us (phase lock " << (config_.phase_lock ? "on" : "off") << ")\n";
   s << "  " << timing().format();
   return s.str();
 }

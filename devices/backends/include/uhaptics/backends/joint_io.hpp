@@ -82,6 +82,11 @@ class JointIo {
   virtual std::uint32_t sampleTimeUs() const noexcept = 0;
   /// Efforts (spec().descriptor.actuators values), held until the next call.
   virtual void command(const double* efforts) noexcept = 0;
+  /// Servo periods between the reading a command is computed from and the period it starts to act
+  /// in, for controllers that model the delay (the TAU's LQR wall): 0 when the device is read right
+  /// after it moved and commanded before it moves again (sim), ServoLoop::kCommandDelayPeriods over
+  /// the board protocol (emulated, usb).
+  virtual int commandDelayPeriods() const noexcept { return 0; }
   /// sim: advances the simulation by dt and returns its fault. emulated/usb: nothing (the device
   /// runs on its own clock), kNone.
   virtual Fault advance(double dt) noexcept = 0;

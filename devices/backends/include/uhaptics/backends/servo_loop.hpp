@@ -44,6 +44,12 @@ struct ServoConfig {
   /// never waits on a page fault. Not MCL_FUTURE: an application past its memlock limit would then
   /// fail its own allocations.
   bool lock_memory = true;
+  /// Shift the loop's deadlines until each COMMAND reaches the board half a sample period after the
+  /// board's newest sample (STATE: board_time_us minus sample_time_us). A board that samples on its
+  /// own clock then always answers with the sample taken just before the previous COMMAND, so the
+  /// command delay is kCommandDelayPeriods in every session, with half a period of margin for
+  /// jitter on either side, instead of depending on the phase between the two clocks.
+  bool phase_lock = true;
   int reconnect_interval_ms = 100;    // while unplugged: how often to look for the device
   int handshake_timeout_ms = 500;     // connect(): how long to wait for each handshake answer
   void validate() const;              // throws Error
@@ -135,6 +141,10 @@ class ServoLoop {
   /// descriptor or the configuration is invalid (DeviceDescriptor::validate, ServoConfig::validate).
   ServoLoop(const DeviceDescriptor& device, Transport& transport, const ServoConfig& config,
             ServoRenderer* renderer = nullptr);
+  /// Periods between the reading a command is computed from and the period the command acts in:
+  /// the STATE a period reads answers the previous period's COMMAND (request/answer cycle), so the
+  /// reading is one exchange old when the command leaves.
+  static constexpr int kCommandDelayPeriods = 1;
   ~ServoLoop();
   ServoLoop(const ServoLoop&) = delete;
   ServoLoop& operator=(const ServoLoop&) = delete;
@@ -159,6 +169,10 @@ class ServoLoop {
   TimingReport timing() const { return timing_.report(); }
   const TimingStats& timingStats() const noexcept { return timing_; }
   std::string realtimeNote() const;
+  /// How old the board's newest sample was when a COMMAND reached it [us], averaged over about the
+  /// last 50 STATEs: what the phase lock steers to half the board's sample period. 0 before the
+  /// first STATE.
+  double sampleAgeUs() const noexcept { return sample_age_us_.load(std::memory_order_relaxed); }
   /// Counters, timing and real-time note as text (what stop() leaves for the log).
   std::string summary() const;
 
@@ -174,6 +188,8 @@ class ServoLoop {
   void run() noexcept;
   void runningTick() noexcept;
   void computeCommand(bool fresh) noexcept;
+  /// After a fresh STATE: the sample's age and, with config_.phase_lock, the deadline shift.
+  void lockPhase() noexcept;
   void tripWatchdog(ServoEventKind why, double periods) noexcept;
   void onDisconnected() noexcept;
   /// The state part of a snapshot (what the renderer sees and what the graphics thread gets).
@@ -208,6 +224,9 @@ class ServoLoop {
   std::uint16_t tx_sequence_ = 0, rx_sequence_ = 0;
   bool have_rx_sequence_ = false, watchdog_tripped_ = false;
   int consecutive_missed_ = 0;
+  std::int64_t sample_period_ns_ = 0;  // the board's (DEVICE_INFO); 0: unknown, no phase lock
+  std::int64_t phase_shift_ns_ = 0;    // deadline shift the phase lock asks of run() [ns]
+  std::atomic<double> sample_age_us_{0.0};
   std::uint32_t clamped_channels_ = 0;
   bool rendered_ = false;  // the renderer ran this period
   wire::BoardError last_board_error_ = wire::BoardError::kNone;

@@ -219,6 +219,10 @@ class cUhapticsDevice : public cGenericHapticDevice {
   /// The joint I/O of the selected backend: makeJointIo() of the registered device for emulated and
   /// usb, the simulated plant for sim. Test fixtures that are not registered devices override it.
   virtual std::unique_ptr<uhaptics::JointIo> makeJointIo();
+  /// From resetRendering() on: periods between the reading sense() gets and the period render()'s
+  /// efforts act in (JointIo::commandDelayPeriods: 0 on sim, 1 over the board protocol), for a
+  /// renderer that models the delay; 0 while closed.
+  int commandDelayPeriods() const noexcept { return m_io ? m_io->commandDelayPeriods() : 0; }
 
   /// What the device senses, in CHAI3D's device frame with the origin at the workspace centre. The
   /// subclass keeps it current in sense() (and sets a resting state in its constructor).
