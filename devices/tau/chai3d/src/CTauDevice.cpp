@@ -52,10 +52,9 @@ cTauDevice::cTauDevice(unsigned int a_deviceNumber, const uhaptics::DeviceSelect
   m_wallMode = static_cast<int>(a_selection.option("wall", 0.0, 0.0, 2.0));
   m_centre = model.homePose().head<3>();
   m_data = std::make_unique<uhaptics::TauData>(model);
-  // LQR gains at the workspace centre (paper 001 linearizes at one operating point).
-  uhaptics::LqrWallRenderer::Options wallOptions;
-  wallOptions.keep_direction = true;
-  m_lqr = std::make_unique<uhaptics::LqrWallRenderer>(model, uhaptics::designLqrWall(model, model.homePose()).gains, wallOptions);
+  // LQR gains at the workspace centre (paper 001 linearizes at one operating point), for the
+  // undelayed plant until open() knows the backend's command delay (resetRendering()).
+  m_lqr = makeWall(0);
 
   // Force the device can produce in any direction at home: tau = J^T [F; 0] within the torque
   // limits, minimized over a sphere of directions; likewise the torque.
@@ -161,8 +160,29 @@ std::unique_ptr<uhaptics::BoardPlant> cTauDevice::makeSimulatedPlant() {
   return std::make_unique<uhaptics::TauBoardPlant>(*m_model, options);
 }
 
+std::unique_ptr<uhaptics::LqrWallRenderer> cTauDevice::makeWall(int a_delay) const {
+  uhaptics::LqrWallRenderer::Options wallOptions;
+  wallOptions.keep_direction = true;
+  uhaptics::ObserverNoise noise;
+  // With a delayed command the observer sees the user's push a period late, and a disturbance
+  // estimate that moves as fast as on the undelayed plant chases the encoders' quantization into the
+  // torque limits; a five times slower random walk keeps it off them (docs/tau.md, "What the scene
+  // sees of a simulated TAU").
+  if (a_delay > 0) noise.disturbance_process = 0.01;
+  const uhaptics::LqrWallDesign design = uhaptics::designLqrWall(*m_model, m_model->homePose(), {}, noise, a_delay);
+  return std::make_unique<uhaptics::LqrWallRenderer>(*m_model, design.gains, wallOptions);
+}
+
 void cTauDevice::resetRendering() {
+  // Over the board protocol a command acts a period later than on the simulation: the LQR and its
+  // observer are designed for the delay the joint I/O has (paper 001's board had none).
+  const int delay = commandDelayPeriods();
+  if (delay != m_wallDelay) {
+    m_lqr = makeWall(delay);
+    m_wallDelay = delay;
+  }
   m_lqr->reset();
+  for (uhaptics::Vec6& sent : m_sent) sent.setZero();
   m_data->pose = m_model->homePose();  // forward kinematics' first guess
   m_classifier.reset();
   m_lqrEngaged = false;
@@ -185,6 +205,7 @@ void cTauDevice::checkFirstReading() {
 
 void cTauDevice::readingLost() noexcept {
   m_tau.setZero();
+  for (uhaptics::Vec6& sent : m_sent) sent.setZero();  // the device is held at zero meanwhile
   m_lqrEngaged = false;
   m_classifier.holdLost();
 }
@@ -229,12 +250,13 @@ uhaptics::Fault cTauDevice::render(const ServoInput& a_input, double* a_efforts)
       m_classifier.update(a_input.force, reported, classifierMode(m_wallMode.load()));
     }
     // The wall renderer runs every tick: its observer must be settled when a contact begins, and
-    // in free space it is the gravity compensation. Its observer is told the torque the device was
-    // last commanded (m_tau, the application's spring included while the LQR is not engaged), not
-    // only its own share, so the spring's force is not mistaken for the user's push.
+    // in free space it is the gravity compensation. Its observer is told the torque that acted on
+    // the plant over the period the reading ends (m_sent: the application's spring included while
+    // the LQR is not engaged), not only its own share, so the spring's force is not mistaken for
+    // the user's push.
     const uhaptics::SurfaceContact& surface = m_classifier.surface();
     // sense() solved the forward kinematics of m_q (m_senseFault is kNone): the wall reuses them.
-    const uhaptics::WallCommand& wall = m_lqr->tick(m_q, surface, *m_data, &m_tau);
+    const uhaptics::WallCommand& wall = m_lqr->tick(m_q, surface, *m_data, &m_sent[m_wallDelay]);
     fault = wall.fault;
     m_tau = wall.torque;
     m_classifier.wallTicked(wall);
@@ -261,6 +283,8 @@ uhaptics::Fault cTauDevice::render(const ServoInput& a_input, double* a_efforts)
     m_classifier.holdLost();
     if (fault == uhaptics::Fault::kNone) fault = uhaptics::Fault::kNonFiniteResult;
   }
+  for (int i = m_wallDelay; i > 0; --i) m_sent[i] = m_sent[i - 1];
+  m_sent[0] = m_tau;
   Eigen::Map<uhaptics::Vec6> out(a_efforts);
   out = m_tau;
   return fault;

@@ -38,6 +38,7 @@
 // saturation) without a hand of its own: the scripted hand's force acts at the tool. On every backend
 // the renderers and the scene work from the encoder readings (4096 counts per turn), velocities
 // from the shared rate estimator over the device's sample clock.
+#include <array>
 #include <memory>
 
 #include "uhaptics/chai3d/CUhapticsDevice.hpp"
@@ -100,6 +101,8 @@ class cTauDevice : public cUhapticsDevice {
   virtual uhaptics::Vec3 modelToDevicePoint(const uhaptics::Vec3& a_point) const noexcept { return a_point - m_centre; }
 
  private:
+  /// The LQR wall designed at home for a command delay of a_delay periods (set-up: allocates, throws).
+  std::unique_ptr<uhaptics::LqrWallRenderer> makeWall(int a_delay) const;
   void recordFigures(const uhaptics::TauContactClassifier::Events& a_events, const uhaptics::Vec3& a_force) noexcept;
   /// m_state from an assembled pose (a_data: pose, Jacobian) at joints a_q, rates m_qd.
   void updateState(const uhaptics::TauData& a_data, const uhaptics::Vec6& a_q) noexcept;
@@ -116,6 +119,10 @@ class cTauDevice : public cUhapticsDevice {
   int m_figEngagements, m_figReleases, m_figHeldTicks, m_figEntryDepth, m_figMaxPenetration, m_figSaturatedTicks,
       m_figSpringTicks, m_figSoftContacts, m_figSoftStiffness, m_figOverloads;
   uhaptics::Vec6 m_tau = uhaptics::Vec6::Zero();
+  int m_wallDelay = 0;  // the command delay [periods] m_lqr is designed for
+  // The torques commanded in the last periods, newest first: the wall's observer is told the one
+  // acting on the plant when the reading was taken (m_sent[m_wallDelay]).
+  std::array<uhaptics::Vec6, uhaptics::kMaxCommandDelay + 1> m_sent;
   uhaptics::Vec6 m_q = uhaptics::Vec6::Zero();   // the latest joint reading
   uhaptics::Vec6 m_qd = uhaptics::Vec6::Zero();  // its rates
   uhaptics::Fault m_senseFault = uhaptics::Fault::kNone;  // forward kinematics of the latest reading
