@@ -163,13 +163,8 @@ std::unique_ptr<uhaptics::BoardPlant> cTauDevice::makeSimulatedPlant() {
 std::unique_ptr<uhaptics::LqrWallRenderer> cTauDevice::makeWall(int a_delay) const {
   uhaptics::LqrWallRenderer::Options wallOptions;
   wallOptions.keep_direction = true;
-  uhaptics::ObserverNoise noise;
-  // With a delayed command the observer sees the user's push a period late, and a disturbance
-  // estimate that moves as fast as on the undelayed plant chases the encoders' quantization into the
-  // torque limits; a five times slower random walk keeps it off them (docs/tau.md, "What the scene
-  // sees of a simulated TAU").
-  if (a_delay > 0) noise.disturbance_process = 0.01;
-  const uhaptics::LqrWallDesign design = uhaptics::designLqrWall(*m_model, m_model->homePose(), {}, noise, a_delay);
+  const uhaptics::LqrWallDesign design = uhaptics::designLqrWall(*m_model, m_model->homePose(), {},
+                                                                 uhaptics::observerNoiseForDelay(a_delay), a_delay);
   return std::make_unique<uhaptics::LqrWallRenderer>(*m_model, design.gains, wallOptions);
 }
 

@@ -81,6 +81,12 @@ ControllerDesign designController(const TauModel& model, const Vec6& operating_p
 
 }  // namespace
 
+ObserverNoise observerNoiseForDelay(int command_delay) noexcept {
+  ObserverNoise noise;
+  if (command_delay > 0) noise.disturbance_process = 0.01;
+  return noise;
+}
+
 LqrWallDesign designLqrWall(const TauModel& model, const Vec6& operating_pose, const LqrWallWeights& w,
                             const ObserverNoise& noise, int command_delay) {
   CommandDelayDesign delay;

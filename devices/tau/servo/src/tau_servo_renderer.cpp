@@ -10,9 +10,12 @@ namespace {
 
 class TauServoRenderer final : public DeviceServoRenderer {
  public:
+  // It runs in a board's servo thread, whose commands act a period after their reading.
+  static constexpr int kDelay = ServoLoop::kCommandDelayPeriods;
+
   explicit TauServoRenderer(TauModel model)
       : model_(std::make_unique<const TauModel>(std::move(model))),
-        wall_(*model_, designLqrWall(*model_, model_->homePose()).gains) {}
+        wall_(*model_, designLqrWall(*model_, model_->homePose(), {}, observerNoiseForDelay(kDelay), kDelay).gains) {}
 
   void render(const DeviceSnapshot& s, const EffortRequest& r, double* efforts) noexcept override {
     const Vec6 q = Eigen::Map<const Vec6>(s.position.data());

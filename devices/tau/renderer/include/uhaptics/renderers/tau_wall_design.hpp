@@ -37,6 +37,13 @@ struct ObserverNoise {
   double quantization = 0.0;       // encoder std (rad); 0: resolution / sqrt(12) of the model
 };
 
+/// The observer noise a device's wall uses under a fixed command delay of `command_delay` periods
+/// (>= 0): the defaults, with a disturbance walk of 0.01 N m per sample once the command is
+/// delayed. Seeing the user's push a period late, an estimate as fast as the undelayed one chases
+/// the encoders' quantization into the torque limits (docs/tau.md, "What the scene sees of a
+/// simulated TAU").
+ObserverNoise observerNoiseForDelay(int command_delay) noexcept;
+
 /// How the wall's LQR accounts for the command delay.
 struct CommandDelayDesign {
   int samples = 0;           // fixed delay D, or the largest delay of the random model (<= kMaxCommandDelay)
