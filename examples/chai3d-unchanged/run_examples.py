@@ -206,7 +206,12 @@ def run_one(table, example, device, backend, display, out, screenshots, reject=F
             os.remove(path)
     with open(config_path, "w") as f:
         json.dump(hand_config(table, example, device), f, indent=1)
-    env = dict(os.environ, DISPLAY=display.name, UHAPTICS_DEVICE=device, UHAPTICS_BACKEND=backend,
+    # Under Xvfb (no vsync) an example draws as fast as it can, and Mesa's software renderer spreads
+    # each frame over every core: one rendering thread leaves the other core to the device's haptic
+    # and servo threads and to whatever runs beside the scene (the caller may set another count).
+    env_base = dict(os.environ)
+    env_base.setdefault("LP_NUM_THREADS", "1")
+    env = dict(env_base, DISPLAY=display.name, UHAPTICS_DEVICE=device, UHAPTICS_BACKEND=backend,
                UHAPTICS_STATS=stats_path, UHAPTICS_CONFIG=config_path)
     seconds = ARGS.seconds if ARGS.seconds else float(example["seconds"])
     exe = os.path.join(ARGS.bin, "uhaptics-chai3d-" + name)
