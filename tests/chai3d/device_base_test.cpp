@@ -104,19 +104,36 @@ TEST_CASE("a servo tick through the CHAI3D call allocates nothing", "[chai3d][de
   CHECK(scope.count() == 0);
 }
 
+namespace {
+
+// The application's haptic loop for 200 ms: setForce() as fast as the device lets it.
+struct SpinResult {
+  std::uint64_t calls = 0;
+  double seconds = 0.0;
+};
+template <class Device>
+SpinResult spinApplicationLoop(Device& device) {
+  SpinResult r;
+  const auto start = std::chrono::steady_clock::now();
+  while (std::chrono::steady_clock::now() - start < std::chrono::milliseconds(200)) {
+    device.setForce(cVector3d(0, 0, 0));
+    ++r.calls;
+  }
+  r.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  return r;
+}
+
+}  // namespace
+
 TEST_CASE("real-time mode: servo ticks follow the wall clock, not the call rate", "[chai3d][device]") {
   auto selection = fixtureSelection();
   selection.options["pace"] = 0.0;  // the application's loop spins as fast as it can
   PointMassDevice device(selection);
   REQUIRE_FALSE(device.getPaced());
   REQUIRE(device.open());
-  const auto start = std::chrono::steady_clock::now();
-  std::uint64_t calls = 0;
-  while (std::chrono::steady_clock::now() - start < std::chrono::milliseconds(200)) {
-    device.setForce(cVector3d(0, 0, 0));
-    ++calls;
-  }
-  const double elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  const SpinResult spin = spinApplicationLoop(device);
+  const double elapsed = spin.seconds;
+  const std::uint64_t calls = spin.calls;
   const auto stats = device.getSessionStats();
   // 1 kHz servo: ticks ~ elapsed / 1 ms. The loop may be descheduled on a loaded 2-core machine, so
   // allow the catch-up cap to drop time: at least half the ticks, never more than the clock allows.
@@ -129,13 +146,9 @@ TEST_CASE("paced (the default): each force command waits for the next servo peri
   PointMassDevice device(fixtureSelection());
   REQUIRE(device.getPaced());
   REQUIRE(device.open());
-  const auto start = std::chrono::steady_clock::now();
-  std::uint64_t calls = 0;
-  while (std::chrono::steady_clock::now() - start < std::chrono::milliseconds(200)) {
-    device.setForce(cVector3d(0, 0, 0));
-    ++calls;
-  }
-  const double elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  const SpinResult spin = spinApplicationLoop(device);
+  const double elapsed = spin.seconds;
+  const std::uint64_t calls = spin.calls;
   const auto stats = device.getSessionStats();
   // A spinning loop makes thousands of calls per tick; paced, one call per period and one tick per
   // call, give or take the ticks a descheduled loop catches up on (at least half, as above).
