@@ -73,7 +73,50 @@ class SilentTransport final : public Transport {
   const char* describe() const noexcept override { return "silent test transport"; }
 };
 
+// A board that samples when a COMMAND arrives: the emulator's STATEs with each sample time set to
+// the answer's board time, so the sample age is 0 whatever the host's phase.
+class SampleOnRequestBoard final : public Transport {
+ public:
+  explicit SampleOnRequestBoard(Transport& board) : board_(board) {}
+  TransportStatus send(const std::uint8_t* data, std::size_t size, int timeout_us) noexcept override {
+    return board_.send(data, size, timeout_us);
+  }
+  TransportStatus receive(std::uint8_t* buffer, std::size_t capacity, std::size_t& n, int timeout_us) noexcept override {
+    const TransportStatus s = board_.receive(buffer, capacity, n, timeout_us);
+    wire::Frame f;
+    if (s != TransportStatus::kOk || wire::decode(buffer, n, f) != wire::Reject::kNone || f.type != wire::MessageType::kState)
+      return s;
+    for (int i = 0; i < f.state.count; ++i) f.state.sample_time_us[i] = f.state.board_time_us;
+    n = wire::encode(f, buffer, capacity);
+    return s;
+  }
+  bool reconnect() noexcept override { return board_.reconnect(); }
+  const char* describe() const noexcept override { return "sample-on-request board"; }
+
+ private:
+  Transport& board_;
+};
+
 }  // namespace
+
+TEST_CASE("phase lock: a board that samples on request is left alone, its period not stretched", "[servo][e2e]") {
+  const DeviceCase& c = kTau;
+  ServoConfig cfg = handDrivenConfig(c);
+  cfg.watchdog_periods = 50;
+  const auto renderer = makeDeviceRenderer(c);
+  Rig rig(c, cfg, renderer.get());  // its loop is not used: the one below talks through the wrapper
+  SampleOnRequestBoard board(rig.board);
+  ServoLoop loop(c.device(), board, cfg, renderer.get());
+  loop.connect();
+  loop.start();
+  std::this_thread::sleep_for(std::chrono::milliseconds(600));  // 600 periods: past the 200 it may try
+  loop.stop();
+  const std::string summary = loop.summary();
+  INFO(summary);
+  CHECK(loop.sampleAgeUs() < 1.0);
+  CHECK(summary.find("given up") != std::string::npos);  // without the give-up: +20 us every period
+  if (kRealTimeBounds) CHECK(loop.timing().period.p50_us == Approx(1000.0).epsilon(0.01));
+}
 
 TEST_CASE("normal operation: each device through its renderer at 1 kHz for 3 s, nothing lost", "[servo][e2e]") {
   for (const DeviceCase& c : allDevices()) {
@@ -160,6 +203,7 @@ TEST_CASE("normal operation: each device through its renderer at 1 kHz for 3 s, 
       // the two clocks started with): the command delay is one period with room for jitter.
       const double sample_period_us = 1e6 / c.spec.sample_rate_hz;
       CHECK(std::abs(rig.loop.sampleAgeUs() - 0.5 * sample_period_us) < 0.2 * sample_period_us);
+      CHECK(rig.loop.summary().find("given up") == std::string::npos);
     }
     // The simulation moved: the exoskeleton's finger flexes by itself; the TAU and the RHI move
     // under the renderer's torques against the hand (at least an encoder count on some joint).

@@ -212,6 +212,7 @@ ServoLoop::HandshakeResult ServoLoop::handshake(int timeout_us, wire::DeviceInfo
   } while (rx_frame_.info.nonce != nonce);
   info = rx_frame_.info;
   sample_period_ns_ = info.sample_rate_hz > 0 ? static_cast<std::int64_t>(std::llround(1e9 / info.sample_rate_hz)) : 0;
+  phase_slewing_periods_.store(0, std::memory_order_relaxed);
   if (info.selected_version == 0 || info.selected_version != device_.protocol_version)
     return HandshakeResult::kVersionMismatch;
   if (rx_frame_.device != device_.type || info.joint_count != device_.joints ||
@@ -495,11 +496,18 @@ void ServoLoop::lockPhase() noexcept {
   const double age_us = static_cast<double>(age_ns) * 1e-3;
   sample_age_us_.store(previous == 0.0 ? age_us : previous + 0.02 * (age_us - previous), std::memory_order_relaxed);
   if (!config_.phase_lock || sample_period_ns_ <= 0 || age_ns >= sample_period_ns_) return;
+  int slewing = phase_slewing_periods_.load(std::memory_order_relaxed);
+  if (slewing < 0) return;
   // A proportional step of 1/8 of the error, slewed to 2 % of a period so that locking never looks
   // like a missed deadline; an older sample means the command comes late in the board's period.
   const std::int64_t error = age_ns - sample_period_ns_ / 2;
   const std::int64_t slew = period_ns_ / 50;
-  phase_shift_ns_ -= std::clamp<std::int64_t>(error / 8, -slew, slew);
+  const std::int64_t step = std::clamp<std::int64_t>(error / 8, -slew, slew);
+  slewing = (step == slew || step == -slew) ? slewing + 1 : 0;
+  // Past the limit the age does not follow the shifts: every further one would only stretch the period.
+  phase_slewing_periods_.store(slewing > kPhaseLockGiveUpPeriods ? -1 : slewing, std::memory_order_relaxed);
+  if (slewing > kPhaseLockGiveUpPeriods) return;
+  phase_shift_ns_ -= step;
 }
 
 void ServoLoop::computeCommand(bool fresh) noexcept {
@@ -594,7 +602,9 @@ std::string ServoLoop::summary() const {
   for (std::size_t i = 1; i < c.rejected_by_reason.size(); ++i)
     if (c.rejected_by_reason[i] > 0)
       s << "  rejected (" << wire::toString(static_cast<wire::Reject>(i)) << "): " << c.rejected_by_reason[i] << "\n";
-  s << "  board sample age at COMMAND " << sampleAgeUs() << " us (phase lock " << (config_.phase_lock ? "on" : "off") << ")\n";
+  s << "  board sample age at COMMAND " << sampleAgeUs() << " us (phase lock "
+    << (!config_.phase_lock ? "off" : phase_slewing_periods_.load(std::memory_order_relaxed) < 0 ? "given up: the board's age does not follow the host's phase" : "on")
+    << ")\n";
   s << "  " << timing().format();
   return s.str();
 }

@@ -48,7 +48,9 @@ struct ServoConfig {
   /// board's newest sample (STATE: board_time_us minus sample_time_us). A board that samples on its
   /// own clock then always answers with the sample taken just before the previous COMMAND, so the
   /// command delay is kCommandDelayPeriods in every session, with half a period of margin for
-  /// jitter on either side, instead of depending on the phase between the two clocks.
+  /// jitter on either side, instead of depending on the phase between the two clocks. A board whose
+  /// sample age does not follow the shifts (one that samples when a COMMAND arrives) is left alone
+  /// after kPhaseLockGiveUpPeriods of full-rate shifting, until the next handshake.
   bool phase_lock = true;
   int reconnect_interval_ms = 100;    // while unplugged: how often to look for the device
   int handshake_timeout_ms = 500;     // connect(): how long to wait for each handshake answer
@@ -145,6 +147,10 @@ class ServoLoop {
   /// the STATE a period reads answers the previous period's COMMAND (request/answer cycle), so the
   /// reading is one exchange old when the command leaves.
   static constexpr int kCommandDelayPeriods = 1;
+  /// Consecutive periods the phase lock may shift at its slew limit (2 % of a period) before it
+  /// concludes the board's sample age does not depend on the host's phase: a free-running board is
+  /// locked within 25 such periods (half a sample period at 2 % each).
+  static constexpr int kPhaseLockGiveUpPeriods = 200;
   ~ServoLoop();
   ServoLoop(const ServoLoop&) = delete;
   ServoLoop& operator=(const ServoLoop&) = delete;
@@ -226,6 +232,7 @@ class ServoLoop {
   int consecutive_missed_ = 0;
   std::int64_t sample_period_ns_ = 0;  // the board's (DEVICE_INFO); 0: unknown, no phase lock
   std::int64_t phase_shift_ns_ = 0;    // deadline shift the phase lock asks of run() [ns]
+  std::atomic<int> phase_slewing_periods_{0};  // consecutive periods at the slew limit; < 0: gave up (single writer)
   std::atomic<double> sample_age_us_{0.0};
   std::uint32_t clamped_channels_ = 0;
   bool rendered_ = false;  // the renderer ran this period
