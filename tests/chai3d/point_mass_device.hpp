@@ -36,6 +36,23 @@ class PointMassPlant final : public uhaptics::BoardPlant {
   uhaptics::Vec3 user = uhaptics::Vec3::Zero();
 };
 
+// The identity policy: the scene's force goes straight to the three actuators.
+class PointMassPolicy final : public uhaptics::DevicePolicy {
+ public:
+  std::string name() const override { return "identity"; }
+  void reset(int) override {}
+  void sense(const uhaptics::SensedJoints& reading, uhaptics::SensedState& state) noexcept override {
+    state.position = Eigen::Map<const uhaptics::Vec3>(reading.positions);
+    state.linear_velocity = Eigen::Map<const uhaptics::Vec3>(reading.rates);
+    state.joints = state.position;  // three prismatic "joints"
+  }
+  uhaptics::Fault render(const uhaptics::SceneInput& input, double* efforts) noexcept override {
+    Eigen::Map<uhaptics::Vec3> out(efforts);
+    out = input.force;
+    return uhaptics::Fault::kNone;
+  }
+};
+
 class PointMassDevice : public chai3d::cUhapticsDevice {
  public:
   static constexpr double kMass = PointMassPlant::kMass;
@@ -44,6 +61,8 @@ class PointMassDevice : public chai3d::cUhapticsDevice {
 
   explicit PointMassDevice(const uhaptics::DeviceSelection& selection)
       : cUhapticsDevice(0, selection, 1e-3, 3, 3) {
+    const double rest[3] = {0.0, 0.0, 0.0};
+    setPolicy(std::make_unique<PointMassPolicy>(), rest);
     setCommonSpecifications("point mass (test fixture)", false);
     m_specifications.m_maxLinearForce = kMaxForce;
     m_specifications.m_maxLinearStiffness = 2000.0;
@@ -52,7 +71,6 @@ class PointMassDevice : public chai3d::cUhapticsDevice {
   }
   ~PointMassDevice() override { close(); }
 
-  std::string getRendererName() const override { return "identity"; }
   /// The simulated point mass (valid while the device is open).
   const PointMassPlant& plant() const { return *plant_; }
 
@@ -70,17 +88,6 @@ class PointMassDevice : public chai3d::cUhapticsDevice {
     auto plant = std::make_unique<PointMassPlant>();
     plant_ = plant.get();
     return plant;
-  }
-  void resetRendering() override {}
-  void sense(const JointReading& reading) noexcept override {
-    m_state.position = Eigen::Map<const uhaptics::Vec3>(reading.positions);
-    m_state.linearVelocity = Eigen::Map<const uhaptics::Vec3>(reading.rates);
-    m_state.joints = m_state.position;  // three prismatic "joints"
-  }
-  uhaptics::Fault render(const ServoInput& input, double* efforts) noexcept override {
-    Eigen::Map<uhaptics::Vec3> out(efforts);
-    out = input.force;
-    return uhaptics::Fault::kNone;
   }
 
  private:

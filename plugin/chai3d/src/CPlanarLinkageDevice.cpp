@@ -13,8 +13,7 @@ namespace {
 // checks consistency (eps1 <= eps2) and the device constructor reports it.
 template <int N>
 uhaptics::FmeControllerOptions<2> optionsFrom(const uhaptics::DeviceSelection& s) {
-  using Device = cPlanarLinkageDevice<N>;
-  uhaptics::FmeControllerOptions<2> o;
+  uhaptics::FmeControllerOptions<2> o = uhaptics::PlanarFmePolicy<N>::defaultOptions();
   const double mode = s.option("mode", 0.0, 0.0, 2.0);
   o.mode = mode == 1.0 ? uhaptics::FmeEllipsoidMode::kFree
                        : mode == 2.0 ? uhaptics::FmeEllipsoidMode::kStiff : uhaptics::FmeEllipsoidMode::kAuto;
@@ -30,9 +29,9 @@ uhaptics::FmeControllerOptions<2> optionsFrom(const uhaptics::DeviceSelection& s
   o.limit_margin = s.option("limit_margin", o.limit_margin, 1e-3, 1.0);
   o.limit_speed = s.option("limit_speed", o.limit_speed, 0.0, 100.0);
   // The null-space torque envelope (the paper's controller has none; see the class comment).
-  o.max_null_space_torque = s.option("max_null_space_torque", Device::kDefaultMaxNullSpaceTorque, 0.01, 10.0);
-  o.null_space_ramp_time = s.option("null_space_ramp_time", Device::kDefaultNullSpaceRampTime, 0.0, 10.0);
-  o.stiff_direction_time = s.option("stiff_direction_time", Device::kDefaultStiffDirectionTime, 0.0, 1.0);
+  o.max_null_space_torque = s.option("max_null_space_torque", o.max_null_space_torque, 0.01, 10.0);
+  o.null_space_ramp_time = s.option("null_space_ramp_time", o.null_space_ramp_time, 0.0, 10.0);
+  o.stiff_direction_time = s.option("stiff_direction_time", o.stiff_direction_time, 0.0, 1.0);
   return o;
 }
 
@@ -41,27 +40,23 @@ uhaptics::FmeControllerOptions<2> optionsFrom(const uhaptics::DeviceSelection& s
 template <int N>
 cPlanarLinkageDevice<N>::cPlanarLinkageDevice(unsigned int a_deviceNumber, const uhaptics::DeviceSelection& a_selection,
                                               Model a_model, const std::string& a_title, double a_workspaceRadius)
-    : cUhapticsDevice(a_deviceNumber, a_selection, 1e-3, Model::kJoints, Model::kJoints),
-      m_model(std::make_unique<const Model>(std::move(a_model))) {
-  const Model& model = *m_model;
+    : cUhapticsDevice(a_deviceNumber, a_selection, 1e-3, Model::kJoints, Model::kJoints) {
+  std::unique_ptr<Policy> policy;
   try {
-    m_controller = std::make_unique<Controller>(model, model.effortLimits(), model.homeJoints(), optionsFrom<N>(a_selection));
+    policy = std::make_unique<Policy>(std::move(a_model), optionsFrom<N>(a_selection), this->sessionStats());
   } catch (const uhaptics::Error& e) {
     throw uhaptics::Error("device " + a_selection.device + " (options/" + a_selection.device + "/...): " + e.what());
   }
-  model.forward(model.homeJoints(), m_centre);
-  using Kind = uhaptics::RendererFigure::Kind;
-  m_figureFreeToStiff = sessionStats().declareFigure("free_to_stiff", Kind::kCount);
-  m_figureStiffToFree = sessionStats().declareFigure("stiff_to_free", Kind::kCount);
-  m_figureStiffTicks = sessionStats().declareFigure("stiff_ticks", Kind::kCount);
-  m_figureForceScaleReduction = sessionStats().declareFigure("max_force_scale_reduction", Kind::kMaximum);
-  m_figureNullSpaceTorque = sessionStats().declareFigure("max_null_space_torque_Nm", Kind::kMaximum);
+  m_fme = policy.get();
+  const Model& model = m_fme->model();
+  const typename Model::JointVector home = model.homeJoints();
+  this->setPolicy(std::move(policy), home.data());
 
   // The force the device can produce in every direction at home: torques tau = J^T F within the
   // ellipse sum (tau_i / T_i)^2 <= 1 allow |F| = 1 / sqrt(u^T J W^2 J^T u) along u; the minimum
   // over u (inside the actual box of limits, so conservative).
   typename Model::Jacobian J;
-  model.jacobian(model.homeJoints(), J);
+  model.jacobian(home, J);
   const typename Model::JointVector w = model.effortLimits().cwiseInverse();
   const uhaptics::Mat2 JWWJt = J * w.cwiseAbs2().asDiagonal() * J.transpose();
   const double lambda_max = Eigen::SelfAdjointEigenSolver<uhaptics::Mat2>(JWWJt, Eigen::EigenvaluesOnly).eigenvalues()(1);
@@ -71,8 +66,6 @@ cPlanarLinkageDevice<N>::cPlanarLinkageDevice(unsigned int a_deviceNumber, const
   m_specifications.m_maxLinearStiffness = 1000.0;  // paper 003's stiff environment K_e
   m_specifications.m_maxLinearDamping = 5.0;       // assumed: well inside 1 kHz stability for these masses
   m_specifications.m_workspaceRadius = a_selection.option("workspace_radius", a_workspaceRadius, 0.01, 0.3);
-  m_q = model.homeJoints();
-  updateState();
 }
 
 template <int N>
@@ -86,80 +79,31 @@ std::unique_ptr<uhaptics::BoardPlant> cPlanarLinkageDevice<N>::makeSimulatedPlan
   typename Plant::Options options;
   options.hand_stiffness = 0.0;  // no grip: the scripted hand is the user
   options.hand_damping = 0.0;
-  return std::make_unique<Plant>(*m_model, options);
-}
-
-template <int N>
-void cPlanarLinkageDevice<N>::resetRendering() {
-  m_controller->reset();  // free-motion ellipsoid; the null-space torque ramps up from zero
-  m_stiffTarget = m_controller->status().omega_target == 0.0;
-  m_tau.setZero();
-}
-
-template <int N>
-void cPlanarLinkageDevice<N>::sense(const JointReading& a_reading) noexcept {
-  m_q = Eigen::Map<const typename Model::JointVector>(a_reading.positions);
-  m_qd = Eigen::Map<const typename Model::JointVector>(a_reading.rates);
-  updateState();
-}
-
-template <int N>
-uhaptics::Fault cPlanarLinkageDevice<N>::render(const ServoInput& a_input, double* a_efforts) noexcept {
-  // A planar device: only the in-plane force is rendered (no torque, x not actuated).
-  const uhaptics::Fault fault = m_controller->tick(a_input.time, m_q, m_qd, deviceToPlanar(a_input.force), m_tau);
-  recordFigures(m_controller->status());
-  Eigen::Map<typename Model::JointVector> out(a_efforts);
-  out = m_tau;
-  return fault;
-}
-
-template <int N>
-void cPlanarLinkageDevice<N>::recordFigures(const typename Controller::Status& a_status) noexcept {
-  uhaptics::SessionStats& stats = sessionStats();
-  // A switch is where the desired ellipsoid starts moving towards the other one (the observer's
-  // hysteresis decision, or a change of mode); a reversal mid-blend counts as a switch back.
-  const bool stiff_target = a_status.omega_target == 0.0;
-  if (stiff_target && !m_stiffTarget) stats.count(m_figureFreeToStiff);
-  if (!stiff_target && m_stiffTarget) stats.count(m_figureStiffToFree);
-  m_stiffTarget = stiff_target;
-  if (a_status.omega < 1.0) stats.count(m_figureStiffTicks);  // any share of the stiff ellipsoid, blends included
-  stats.observeMaximum(m_figureForceScaleReduction, 1.0 - a_status.alpha);
-  stats.observeMaximum(m_figureNullSpaceTorque, a_status.tau_null.norm());
-}
-
-template <int N>
-void cPlanarLinkageDevice<N>::updateState() noexcept {
-  // Kinematics of the latest joint reading.
-  uhaptics::Vec2 x;
-  typename Model::Jacobian J;
-  m_model->forwardAndJacobian(m_q, x, J);
-  m_state.position = planarToDevice(x - m_centre);
-  m_state.linearVelocity = planarToDevice(J * m_qd);
-  m_state.joints = m_q;
+  return std::make_unique<Plant>(m_fme->model(), options);
 }
 
 template <int N>
 bool cPlanarLinkageDevice<N>::setNullSpaceOptions(const typename Controller::Options& a_options) {
   std::lock_guard<std::mutex> lock(deviceMutex());
-  return m_controller->setOptions(a_options) == uhaptics::Fault::kNone;
+  return m_fme->controller().setOptions(a_options) == uhaptics::Fault::kNone;
 }
 
 template <int N>
 typename cPlanarLinkageDevice<N>::Controller::Options cPlanarLinkageDevice<N>::getNullSpaceOptions() {
   std::lock_guard<std::mutex> lock(deviceMutex());
-  return m_controller->options();
+  return m_fme->controller().options();
 }
 
 template <int N>
 typename cPlanarLinkageDevice<N>::Controller::Status cPlanarLinkageDevice<N>::getNullSpaceStatus() {
   std::lock_guard<std::mutex> lock(deviceMutex());
-  return m_controller->status();
+  return m_fme->controller().status();
 }
 
 template <int N>
 typename cPlanarLinkageDevice<N>::Model::JointVector cPlanarLinkageDevice<N>::getJointPositions() {
   std::lock_guard<std::mutex> lock(deviceMutex());
-  return m_q;
+  return m_fme->joints();
 }
 
 template class cPlanarLinkageDevice<3>;

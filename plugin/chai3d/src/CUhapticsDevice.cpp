@@ -93,6 +93,14 @@ void cUhapticsDevice::setCommonSpecifications(const std::string& a_modelName, bo
   }
 }
 
+void cUhapticsDevice::setPolicy(std::unique_ptr<uhaptics::DevicePolicy> a_policy, const double* a_restJoints) {
+  static_assert(uhaptics::kMaxSensedJoints == C_MAX_DOF, "a policy reports as many joints as CHAI3D takes");
+  if (!a_policy) throw uhaptics::Error("device '" + m_selection.device + "': no rendering policy");
+  m_policy = std::move(a_policy);
+  const std::array<double, C_MAX_DOF> rates{};
+  m_policy->sense(uhaptics::SensedJoints{a_restJoints, rates.data(), true}, m_state);  // at rest until opened
+}
+
 std::string cUhapticsDevice::paramsDirectory() {
   return uhaptics::defaultParamsDirectory();
 }
@@ -136,15 +144,15 @@ bool cUhapticsDevice::readJointsLocked(bool a_first) noexcept {
 void cUhapticsDevice::senseLocked(const double* a_positions, std::uint32_t a_sampleUs, bool a_first) noexcept {
   if (a_first) m_rateEstimator.reset();
   m_rateEstimator.update(a_positions, m_joints, a_sampleUs, m_rates.data());
-  JointReading reading;
+  uhaptics::SensedJoints reading;
   reading.positions = a_positions;
   reading.rates = m_rates.data();
   reading.first = a_first;
-  sense(reading);
+  m_policy->sense(reading, m_state);
 }
 
-uhaptics::Fault cUhapticsDevice::renderChecked(const ServoInput& a_input) noexcept {
-  uhaptics::Fault fault = render(a_input, m_efforts.data());
+uhaptics::Fault cUhapticsDevice::renderChecked(const uhaptics::SceneInput& a_input) noexcept {
+  uhaptics::Fault fault = m_policy->render(a_input, m_efforts.data());
   bool finite = true;
   for (int i = 0; i < m_actuators; ++i) finite = finite && std::isfinite(m_efforts[i]);
   if (fault != uhaptics::Fault::kNone || !finite) {
@@ -158,13 +166,13 @@ void cUhapticsDevice::pushHandLocked(double a_time) noexcept {
   if (!m_handEnabled) return;
   // The hand holds the device as it is (a damper on an encoder-differenced velocity would lag);
   // a plant without a point for it (its user is its own) is pushed from the sensed state.
-  uhaptics::Vec3 position = m_state.position, velocity = m_state.linearVelocity;
+  uhaptics::Vec3 position = m_state.position, velocity = m_state.linear_velocity;
   uhaptics::Vec3 modelPosition, modelVelocity;
   if (m_io->readUserPoint(modelPosition, modelVelocity)) {
-    position = modelToDevicePoint(modelPosition);
-    velocity = modelToDeviceVector(modelVelocity);
+    position = m_policy->modelToDevicePoint(modelPosition);
+    velocity = m_policy->modelToDeviceVector(modelVelocity);
   }
-  m_io->setUserForce(deviceToModelForce(m_hand->force(a_time, position, velocity)));
+  m_io->setUserForce(m_policy->deviceToModelForce(m_hand->force(a_time, position, velocity)));
 }
 
 void cUhapticsDevice::recordTickLocked(double a_force, uhaptics::Fault a_fault) noexcept {
@@ -200,7 +208,8 @@ bool cUhapticsDevice::open() {
                             std::to_string(d.actuators) + " actuators; device '" + m_selection.device + "' needs " +
                             std::to_string(m_joints) + " and " + std::to_string(m_actuators));
     }
-    resetRendering();
+    // Over the board protocol a command acts a period after its reading: the policy is designed for it.
+    m_policy->reset(m_io->commandDelayPeriods());
     m_ticks = 0;
     m_lastFault = uhaptics::Fault::kNone;
     m_stats.start(wallTime());
@@ -244,7 +253,7 @@ bool cUhapticsDevice::open() {
       }
       m_sensedAfterAdvance = true;  // the first tick renders from this reading
     }
-    checkFirstReading();
+    m_policy->checkFirstReading();
   } catch (const std::exception& e) {
     m_servoArmed.store(false);
     if (lock.owns_lock()) lock.unlock();  // the servo thread may be waiting for it to finish its period
@@ -277,7 +286,8 @@ bool cUhapticsDevice::close() {
     }
     m_servoArmed.store(false);  // the servo thread's next periods send zero
     commandZeroLocked();
-    endSession();
+    m_policy->endSession();
+    sessionClosed();
     lock.unlock();  // a servo period in progress finishes first
     m_io->close();  // zero effort, servo thread stopped, interface released
     lock.lock();
@@ -348,13 +358,13 @@ void cUhapticsDevice::tickLocked() noexcept {
   m_stats.recordReading(reading);
   if (!reading) {
     commandZeroLocked();
-    readingLost();
+    m_policy->readingLost();
     fault = uhaptics::Fault::kDeviceError;
   } else {
-    ServoInput input;
+    uhaptics::SceneInput input;
     input.force = sendForce ? m_commandForce : uhaptics::Vec3::Zero();
     input.torque = sendForce ? m_commandTorque : uhaptics::Vec3::Zero();
-    input.seenPosition = seen;
+    input.seen_position = seen;
     input.dt = m_servoPeriod;
     input.time = t;
     fault = renderChecked(input);
@@ -392,12 +402,12 @@ void cUhapticsDevice::servoTick(const uhaptics::DeviceSnapshot& a_snapshot, doub
   uhaptics::Fault fault = uhaptics::Fault::kNone;
   double force = 0.0;
   if (!stale) {
-    ServoInput input;
+    uhaptics::SceneInput input;
     input.force = published ? uhaptics::Vec3(m_servoInput.force[0], m_servoInput.force[1], m_servoInput.force[2])
                             : uhaptics::Vec3::Zero();
     input.torque = published ? uhaptics::Vec3(m_servoInput.torque[0], m_servoInput.torque[1], m_servoInput.torque[2])
                              : uhaptics::Vec3::Zero();
-    input.seenPosition = published ? uhaptics::Vec3(m_servoInput.seen[0], m_servoInput.seen[1], m_servoInput.seen[2])
+    input.seen_position = published ? uhaptics::Vec3(m_servoInput.seen[0], m_servoInput.seen[1], m_servoInput.seen[2])
                                    : (first ? m_state.position : sensedBefore);
     input.dt = m_servoPeriod;
     input.time = t;
@@ -408,7 +418,7 @@ void cUhapticsDevice::servoTick(const uhaptics::DeviceSnapshot& a_snapshot, doub
   } else {
     // A stalled application: its last force no longer belongs to where the device is. End the
     // contact and ramp the last efforts down (no step for the user's hand).
-    if (m_staleTicks == 0) readingLost();
+    if (m_staleTicks == 0) m_policy->readingLost();
     ++m_staleTicks;
     const double scale = std::max(0.0, 1.0 - static_cast<double>(m_staleTicks) / kStaleRampPeriods);
     for (int i = 0; i < m_actuators; ++i) m_efforts[i] = scale * m_heldEfforts[i];
@@ -434,7 +444,7 @@ void cUhapticsDevice::servoNoReading(const uhaptics::DeviceSnapshot& a_snapshot)
     case uhaptics::LinkState::kRunning: m_linkStatus = uhaptics::LinkStatus::kHostWatchdog; break;
   }
   m_stats.recordReading(false);
-  readingLost();
+  m_policy->readingLost();
   m_efforts.fill(0.0);
   m_heldEfforts.fill(0.0);
   m_servoFirst = true;  // rates start again from the next reading
@@ -448,8 +458,8 @@ void cUhapticsDevice::publishStateLocked() noexcept {
   PublishedState p;
   for (int i = 0; i < 3; ++i) {
     p.position[i] = m_state.position(i);
-    p.linearVelocity[i] = m_state.linearVelocity(i);
-    p.angularVelocity[i] = m_state.angularVelocity(i);
+    p.linearVelocity[i] = m_state.linear_velocity(i);
+    p.angularVelocity[i] = m_state.angular_velocity(i);
     for (int j = 0; j < 3; ++j) p.rotation[3 * i + j] = m_state.rotation(i, j);
   }
   for (int i = 0; i < C_MAX_DOF; ++i) p.joints[i] = i < m_state.joints.size() ? m_state.joints(i) : 0.0;
@@ -465,8 +475,8 @@ void cUhapticsDevice::pullStateLocked() noexcept {
   if (!m_stateExchange.read(m_published) || !m_published.sensed) return;
   const PublishedState& p = m_published;
   m_appState.position = uhaptics::Vec3(p.position[0], p.position[1], p.position[2]);
-  m_appState.linearVelocity = uhaptics::Vec3(p.linearVelocity[0], p.linearVelocity[1], p.linearVelocity[2]);
-  m_appState.angularVelocity = uhaptics::Vec3(p.angularVelocity[0], p.angularVelocity[1], p.angularVelocity[2]);
+  m_appState.linear_velocity = uhaptics::Vec3(p.linearVelocity[0], p.linearVelocity[1], p.linearVelocity[2]);
+  m_appState.angular_velocity = uhaptics::Vec3(p.angularVelocity[0], p.angularVelocity[1], p.angularVelocity[2]);
   for (int i = 0; i < 3; ++i)
     for (int j = 0; j < 3; ++j) m_appState.rotation(i, j) = p.rotation[3 * i + j];
   m_appState.joints.resize(m_joints);
@@ -513,7 +523,7 @@ bool cUhapticsDevice::getPosition(cVector3d& a_position) {
   const auto lock = lockApplication(true);
   const State& state = applicationState();
   a_position = toChai(state.position);
-  m_linearVelocity = toChai(state.linearVelocity);  // the state knows it: no finite-difference estimate
+  m_linearVelocity = toChai(state.linear_velocity);  // the state knows it: no finite-difference estimate
   return m_deviceReady;
 }
 
@@ -521,26 +531,26 @@ bool cUhapticsDevice::getRotation(cMatrix3d& a_rotation) {
   const auto lock = lockApplication(false);
   const uhaptics::Mat3& r = applicationState().rotation;
   a_rotation.set(r(0, 0), r(0, 1), r(0, 2), r(1, 0), r(1, 1), r(1, 2), r(2, 0), r(2, 1), r(2, 2));
-  m_angularVelocity = toChai(applicationState().angularVelocity);
+  m_angularVelocity = toChai(applicationState().angular_velocity);
   return m_deviceReady;
 }
 
 bool cUhapticsDevice::getLinearVelocity(cVector3d& a_linearVelocity) {
   const auto lock = lockApplication(false);
-  a_linearVelocity = m_linearVelocity = toChai(applicationState().linearVelocity);
+  a_linearVelocity = m_linearVelocity = toChai(applicationState().linear_velocity);
   return m_deviceReady;
 }
 
 bool cUhapticsDevice::getAngularVelocity(cVector3d& a_angularVelocity) {
   const auto lock = lockApplication(false);
-  a_angularVelocity = m_angularVelocity = toChai(applicationState().angularVelocity);
+  a_angularVelocity = m_angularVelocity = toChai(applicationState().angular_velocity);
   return m_deviceReady;
 }
 
 bool cUhapticsDevice::getVelocities(cVector3d& a_linearVelocity, cVector3d& a_angularVelocity) {
   const auto lock = lockApplication(false);
-  a_linearVelocity = m_linearVelocity = toChai(applicationState().linearVelocity);
-  a_angularVelocity = m_angularVelocity = toChai(applicationState().angularVelocity);
+  a_linearVelocity = m_linearVelocity = toChai(applicationState().linear_velocity);
+  a_angularVelocity = m_angularVelocity = toChai(applicationState().angular_velocity);
   return m_deviceReady;
 }
 

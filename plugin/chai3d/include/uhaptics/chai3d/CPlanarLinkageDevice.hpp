@@ -4,44 +4,26 @@
 // joints for a 2-D task, N - 2 degrees of self-motion. The devices derive from it with their model
 // and title (the RHI: cRedundantPlanarDevice; paper 003's 3-DoF example arm: cPlanarArmDevice).
 //
-// CHAI3D view: the device's task plane mapped onto the device frame's y-z plane (the paper's x to
-// +y, its y, the palpation direction u, to -z: pressing down palpates), origin at the home
-// configuration's end-effector position; x is never sensed nor actuated.
-//
-// Rendering: tau = J^T (alpha F) + (I - J^T J#^T) tau_S (FmeNullSpaceController): the force a stock
-// CHAI3D tool sends is the primary task, rendered unchanged (scaled as a whole only when an actuator
-// would saturate); the null space reshapes the force manipulability ellipsoid (light in free
-// motion, strong along a stiff contact force) without changing the force at the tool, within a
-// bounded, ramped envelope (options below).
-//
-// Renderer figures (session statistics, "renderer_figures" of the stats file):
-//   free_to_stiff              count: switches of the desired ellipsoid towards the stiff-contact one
-//                              (the observer fell below eps1, or mode changed to 2)
-//   stiff_to_free              count: switches back towards the free-motion one (a reversal during a
-//                              blend counts as a switch)
-//   stiff_ticks                count: ticks with any share of the stiff-contact ellipsoid in the
-//                              desired one (omega < 1), both blends included
-//   max_force_scale_reduction  maximum of 1 - alpha, the uniform force scaling before an actuator
-//                              saturates (0: the force was never scaled)
-//   max_null_space_torque_Nm   maximum Euclidean norm of the applied null-space torque [N m]
+// Rendering: uhaptics::PlanarFmePolicy<N> (planar_fme_policy.hpp: the device frame, the controller,
+// the figures it records in the session statistics, "renderer_figures" of the stats file), with
+// this device's null-space envelope (options below).
 //
 // Simulated backend: PlanarLinkagePlant<N> (lumped dynamics, friction, torque saturation) with no
 // grip of its own: the scripted hand's force acts at the end effector. On every backend the
-// controller runs on the joint readings (rates exact from the simulation, else their differences
-// over the board's sample clock).
+// controller runs on the joint readings, rates from the shared estimator.
 #include <memory>
 
 #include "uhaptics/chai3d/CUhapticsDevice.hpp"
-#include "uhaptics/models/planar_linkage_model.hpp"
-#include "uhaptics/renderers/fme_null_space_controller.hpp"
+#include "uhaptics/renderers/planar_fme_policy.hpp"
 
 namespace chai3d {
 
 template <int N>
 class cPlanarLinkageDevice : public cUhapticsDevice {
  public:
-  using Model = uhaptics::PlanarLinkageModel<N>;
-  using Controller = uhaptics::FmeNullSpaceController<Model>;
+  using Policy = uhaptics::PlanarFmePolicy<N>;
+  using Model = typename Policy::Model;
+  using Controller = typename Policy::Controller;
 
   /// Options ("options/<device>/<name>" in the UHAPTICS_CONFIG file, or DeviceSelection::options in
   /// code), defaults from paper 003:
@@ -76,12 +58,10 @@ class cPlanarLinkageDevice : public cUhapticsDevice {
                        const std::string& a_title, double a_workspaceRadius);
   virtual ~cPlanarLinkageDevice();
 
-  virtual std::string getRendererName() const { return "J^T F + FME null space"; }
-
   /// Defaults of the null-space envelope options (see above).
-  static constexpr double kDefaultMaxNullSpaceTorque = 0.5;  // [N m]
-  static constexpr double kDefaultNullSpaceRampTime = 0.25;  // [s]
-  static constexpr double kDefaultStiffDirectionTime = 0.02;  // [s]
+  static constexpr double kDefaultMaxNullSpaceTorque = Policy::kDefaultMaxNullSpaceTorque;  // [N m]
+  static constexpr double kDefaultNullSpaceRampTime = Policy::kDefaultNullSpaceRampTime;    // [s]
+  static constexpr double kDefaultStiffDirectionTime = Policy::kDefaultStiffDirectionTime;  // [s]
 
   /// Null-space controller options from CHAI3D code (desired ellipsoid scaling mu, thresholds
   /// eps1/eps2, rho, beta, K_d = damping, fixed or automatic mode, the envelope), also while the
@@ -92,35 +72,13 @@ class cPlanarLinkageDevice : public cUhapticsDevice {
   typename Controller::Status getNullSpaceStatus();
   /// Joint state of the latest tick.
   typename Model::JointVector getJointPositions();
-  const Model& getModel() const { return *m_model; }
+  const Model& getModel() const { return m_fme->model(); }
 
  protected:
   virtual std::unique_ptr<uhaptics::BoardPlant> makeSimulatedPlant();
-  virtual void resetRendering();
-  virtual void sense(const JointReading& a_reading) noexcept;
-  virtual uhaptics::Fault render(const ServoInput& a_input, double* a_efforts) noexcept;
-  virtual uhaptics::Vec3 deviceToModelForce(const uhaptics::Vec3& a_force) const noexcept { return this->planarForce(a_force); }
-  virtual uhaptics::Vec3 modelToDevicePoint(const uhaptics::Vec3& a_point) const noexcept {
-    return this->planarToDevice(a_point.template head<2>() - m_centre);
-  }
-  virtual uhaptics::Vec3 modelToDeviceVector(const uhaptics::Vec3& a_vector) const noexcept {
-    return this->planarToDevice(a_vector.template head<2>());
-  }
 
  private:
-  void updateState() noexcept;  // m_state from m_q, m_qd
-  void recordFigures(const typename Controller::Status& a_status) noexcept;  // the renderer figures of one tick
-
-  std::unique_ptr<const Model> m_model;  // the controller keeps a reference
-  std::unique_ptr<Controller> m_controller;
-  uhaptics::Vec2 m_centre = uhaptics::Vec2::Zero();  // end effector at home, task frame
-  typename Model::JointVector m_tau = Model::JointVector::Zero();
-  typename Model::JointVector m_q = Model::JointVector::Zero();   // the latest joint reading
-  typename Model::JointVector m_qd = Model::JointVector::Zero();  // its rates
-  // Renderer figures (session statistics): ids, and whether the last tick headed for the stiff ellipsoid.
-  int m_figureFreeToStiff = -1, m_figureStiffToFree = -1, m_figureStiffTicks = -1;
-  int m_figureForceScaleReduction = -1, m_figureNullSpaceTorque = -1;
-  bool m_stiffTarget = false;
+  Policy* m_fme;  // the policy (owned by cUhapticsDevice)
 };
 
 extern template class cPlanarLinkageDevice<3>;

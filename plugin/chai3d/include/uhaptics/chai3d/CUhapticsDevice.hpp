@@ -8,7 +8,9 @@
 //
 //   read the joints -> sense() (kinematics, CHAI3D state) -> render() (efforts) -> command
 //
-// sense() and render() are the device's rendering policy; where they run depends on the backend:
+// sense() and render() are the device's rendering policy (uhaptics::DevicePolicy, device_policy.hpp:
+// one object per device, in the renderer layer, which the servo tool runs too); where they run
+// depends on the backend:
 //
 //  - "emulated" and "usb" (a board: the in-process emulator or the device's controller board): in
 //    the board's real-time servo thread, once per period, on that period's encoder reading (paper
@@ -17,7 +19,7 @@
 //    position it computed them from), time-stamped, and reads back the state; both through
 //    wait-free triple buffers, so neither thread waits for the other. Input older than the stale
 //    time (option "stale_time", default 10 ms; no setForce() since) is a fault like a lost link:
-//    readingLost() ends the contact (the TAU's LQR wall lets go), the efforts ramp linearly to zero
+//    the policy's readingLost() ends the contact (the TAU's LQR wall lets go), the efforts ramp linearly to zero
 //    over kStaleRampPeriods periods, the statistics count it, and rendering resumes with the next
 //    publication.
 //  - "sim" (default): the device's simulated plant (makeSimulatedPlant()) stepped by the
@@ -39,11 +41,11 @@
 // Statistics (session_stats.hpp): recorded by whichever thread ticks, optionally written to a file
 // every half second and on close, so even a killed process leaves a recent record.
 //
-// Subclasses implement only what differs between devices: their specification (in the
-// constructor), their simulated plant, how a joint reading becomes kinematics and CHAI3D state
-// (sense) and how to render (render). All hooks run with the device mutex (deviceMutex()) held, in
-// the thread that ticks; subclass accessors that read rendering state take it too. The
-// application's hot path (getPosition(), setForce...()) never takes it on a board backend.
+// Subclasses supply only what is CHAI3D's or the simulation's: their specification and their policy
+// (in the constructor, setPolicy()), their simulated plant, and accessors for their policy's state.
+// The policy runs with the device mutex (deviceMutex()) held, in the thread that ticks; subclass
+// accessors that read its state take it too. The application's hot path (getPosition(),
+// setForce...()) never takes it on a board backend.
 #include <array>
 #include <atomic>
 #include <chrono>
@@ -64,6 +66,7 @@
 #include "uhaptics/chai3d/session_stats.hpp"
 #include "uhaptics/core/fault.hpp"
 #include "uhaptics/core/types.hpp"
+#include "uhaptics/renderers/device_policy.hpp"
 
 namespace chai3d {
 
@@ -152,7 +155,7 @@ class cUhapticsDevice : public cGenericHapticDevice {
   /// open; nullptr on sim.
   uhaptics::ServoLoop* getServoLoop();
   /// Name of the rendering method now in use (may change at run time, e.g. TAU's wall).
-  virtual std::string getRendererName() const = 0;
+  std::string getRendererName() const { return m_policy->name(); }
   /// Whether sense() and render() run in the board's servo thread (emulated, usb) rather than in
   /// the application's calls (sim).
   bool rendersInServoThread() const { return m_servoThreadRenders; }
@@ -171,99 +174,35 @@ class cUhapticsDevice : public cGenericHapticDevice {
   cUhapticsDevice(unsigned int a_deviceNumber, const uhaptics::DeviceSelection& a_selection,
                   double a_servoPeriod, int a_joints, int a_actuators);
 
-  /// What one servo period gets: the application's force [N] and torque [N m] in the device frame
-  /// (zero while forces are disabled).
-  struct ServoInput {
-    uhaptics::Vec3 force, torque;
-    /// The position the application last read (device frame), the one its force was computed from.
-    uhaptics::Vec3 seenPosition;
-    double dt;    // the servo period [s]
-    double time;  // servo ticks so far x dt [s]
-  };
-
   // ---- what a device class supplies ---------------------------------------------------------
+  /// In the constructor: the device's rendering policy, and the joints it rests at until opened
+  /// (the state the application reads before open()). Its figures go to sessionStats().
+  void setPolicy(std::unique_ptr<uhaptics::DevicePolicy> a_policy, const double* a_restJoints);
   /// The "sim" backend's device, made in open(): the device's simulation with the scripted hand as
   /// its user (BoardPlant::setUserForce) or, for a position-driven device, a user of its own.
   virtual std::unique_ptr<uhaptics::BoardPlant> makeSimulatedPlant() = 0;
-  /// In open(), before the first reading: renderers and filters to their initial state.
-  virtual void resetRendering() = 0;
-  /// One joint reading (a_joints values each).
-  struct JointReading {
-    const double* positions;  // as the sensors give them (encoder counts times their resolution)
-    const double* rates;      // JointRateEstimator over the device's sample clock (zero on the
-                              // session's first reading)
-    bool first;               // the session's first reading
-  };
-  /// Update what render() needs and m_state from a reading: the scene sees what the sensors say.
-  virtual void sense(const JointReading& a_reading) noexcept = 0;
-  /// In open(), after the first sense(): throws uhaptics::Error when the device cannot start from
-  /// that reading.
-  virtual void checkFirstReading() {}
-  /// One servo period from the last sense(): the actuator efforts for the application's force and
-  /// torque. A returned fault (or a non-finite effort) sends zero instead.
-  virtual uhaptics::Fault render(const ServoInput& a_input, double* a_efforts) noexcept = 0;
-  /// A period without a reading (link down, host watchdog) or without current input from the
-  /// application (board backends: stale input): render() was not called; end what assumes a
-  /// continuous contact.
-  virtual void readingLost() noexcept {}
-  /// close(): the last command was zero; end the session's rendering state. Must not throw.
-  virtual void endSession() noexcept {}
-  /// The scripted hand's force (device frame) in the device model's task frame, for the simulated
-  /// plant: unchanged by default; planar devices override it with planarForce().
-  virtual uhaptics::Vec3 deviceToModelForce(const uhaptics::Vec3& a_force) const noexcept { return a_force; }
-  /// A point [m] and a vector of the device model's task frame in the device frame (where the
-  /// scripted hand holds the simulated plant): unchanged by default; the TAU shifts points by its
-  /// workspace centre, planar devices map with planarToDevice().
-  virtual uhaptics::Vec3 modelToDevicePoint(const uhaptics::Vec3& a_point) const noexcept { return a_point; }
-  virtual uhaptics::Vec3 modelToDeviceVector(const uhaptics::Vec3& a_vector) const noexcept { return a_vector; }
+  /// close(), after the policy's endSession(): drop what referred to the session's joint I/O.
+  virtual void sessionClosed() noexcept {}
   /// The joint I/O of the selected backend: makeJointIo() of the registered device for emulated and
   /// usb, the simulated plant for sim. Test fixtures that are not registered devices override it.
   virtual std::unique_ptr<uhaptics::JointIo> makeJointIo();
-  /// From resetRendering() on: periods between the reading sense() gets and the period render()'s
-  /// efforts act in (JointIo::commandDelayPeriods: 0 on sim, 1 over the board protocol), for a
-  /// renderer that models the delay; 0 while closed.
-  int commandDelayPeriods() const noexcept { return m_io ? m_io->commandDelayPeriods() : 0; }
-
-  /// What the device senses, in CHAI3D's device frame with the origin at the workspace centre. The
-  /// subclass keeps it current in sense() (and sets a resting state in its constructor).
-  struct State {
-    uhaptics::Vec3 position = uhaptics::Vec3::Zero();
-    uhaptics::Mat3 rotation = uhaptics::Mat3::Identity();
-    uhaptics::Vec3 linearVelocity = uhaptics::Vec3::Zero();
-    uhaptics::Vec3 angularVelocity = uhaptics::Vec3::Zero();
-    /// Joint angles (actuated and sensed) [rad, or m for prismatic joints]; no heap (fixed maximum).
-    Eigen::Matrix<double, Eigen::Dynamic, 1, Eigen::ColMajor, C_MAX_DOF, 1> joints;
-  };
 
   /// Fills the fields every uhaptics device shares (manufacturer, no gripper, no switches, position
   /// sensed and actuated, both hands) and whether the orientation is too; without it every angular
   /// limit is 0. The subclass then sets its forces, stiffness, damping and workspace.
   void setCommonSpecifications(const std::string& a_modelName, bool a_orientation);
-  /// Planar devices (exoskeleton finger, RHI) work in the device frame's y-z plane: task x -> +y,
-  /// task y -> -z; the device x axis is never sensed nor actuated.
-  static uhaptics::Vec3 planarToDevice(const uhaptics::Vec2& a_task) noexcept {
-    return uhaptics::Vec3(0.0, a_task.x(), -a_task.y());
-  }
-  static uhaptics::Vec2 deviceToPlanar(const uhaptics::Vec3& a_device) noexcept {
-    return uhaptics::Vec2(a_device.y(), -a_device.z());
-  }
-  /// A device-frame force in a planar model's task frame (x, y, 0).
-  static uhaptics::Vec3 planarForce(const uhaptics::Vec3& a_device) noexcept {
-    return uhaptics::Vec3(a_device.y(), -a_device.z(), 0.0);
-  }
   /// Folder of the device parameter files: uhaptics::defaultParamsDirectory() (params_location.hpp).
   static std::string paramsDirectory();
-  /// The session statistics, for subclasses to declare (constructor) and record (render) the
-  /// figures that show their rendering method at work.
+  /// The session statistics: where the policy records its figures (setPolicy's caller passes it).
   uhaptics::SessionStats& sessionStats() noexcept { return m_stats; }
-  /// Held during every hook; subclass accessors that read device state take it too.
+  /// Held while the policy runs; subclass accessors that read its state take it too.
   std::mutex& deviceMutex() { return m_mutex; }
 
   uhaptics::DeviceSelection m_selection;
-  State m_state;
 
  private:
   using Clock = std::chrono::steady_clock;
+  using State = uhaptics::SensedState;  // what the device senses (device frame)
   class ServoBridge;
   friend class ServoBridge;
   /// Haptic thread -> servo thread (board backends): what the scene asks for, time-stamped.
@@ -289,7 +228,7 @@ class cUhapticsDevice : public cGenericHapticDevice {
   /// sense() on positions from the sensors (rates by the estimator).
   void senseLocked(const double* a_positions, std::uint32_t a_sampleUs, bool a_first) noexcept;
   /// render() with the checks every backend applies: a fault or a non-finite effort sends zero.
-  uhaptics::Fault renderChecked(const ServoInput& a_input) noexcept;
+  uhaptics::Fault renderChecked(const uhaptics::SceneInput& a_input) noexcept;
   /// The scripted hand's force on the simulated or emulated plant, from the sensed state.
   void pushHandLocked(double a_time) noexcept;
   void recordTickLocked(double a_force, uhaptics::Fault a_fault) noexcept;
@@ -312,6 +251,8 @@ class cUhapticsDevice : public cGenericHapticDevice {
   void writeStats(const std::string& a_path) noexcept;
 
   std::mutex m_mutex;  // the policy's: held by the thread that ticks and by subclass accessors
+  std::unique_ptr<uhaptics::DevicePolicy> m_policy;  // setPolicy()
+  State m_state;       // the policy's latest sense()
   const double m_servoPeriod;
   const bool m_servoThreadRenders;  // emulated, usb
   const double m_staleTime;         // [s]

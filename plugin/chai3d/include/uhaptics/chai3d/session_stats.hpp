@@ -7,12 +7,14 @@
 #include <cstdint>
 #include <string>
 
+#include "uhaptics/renderers/device_policy.hpp"
+
 namespace uhaptics {
 
 /// A figure of the device's own rendering method (e.g. the LQR wall's engagements, its deepest
 /// penetration): a count or a maximum, named by the device.
 struct RendererFigure {
-  enum class Kind { kCount, kMaximum };
+  using Kind = FigureKind;
   const char* name = "";  // a string literal of the device class: lives as long as the program
   Kind kind = Kind::kCount;
   double value = 0.0;
@@ -49,7 +51,7 @@ struct SessionStatsSnapshot {
   const RendererFigure* figure(const std::string& name) const noexcept;
 };
 
-class SessionStats {
+class SessionStats final : public FigureRecorder {
  public:
   /// contact_threshold [N]: a contact starts above it and ends below half of it (hysteresis, so
   /// force ripple at the threshold is not counted as many contacts).
@@ -72,10 +74,10 @@ class SessionStats {
   /// Declares a renderer figure (set-up only, before the servo thread records; name a string
   /// literal) and returns its id for count()/observeMaximum(). start() zeroes the values and keeps
   /// the declarations. Throws uhaptics::Error past kMaxFigures or for a repeated name.
-  int declareFigure(const char* name, RendererFigure::Kind kind);
+  int declareFigure(const char* name, FigureKind kind) override;
   /// Servo thread: adds n to a count / raises a maximum (non-finite values are ignored).
-  void count(int id, std::uint64_t n = 1) noexcept;
-  void observeMaximum(int id, double value) noexcept;
+  void count(int id, std::uint64_t n = 1) noexcept override;
+  void observeMaximum(int id, double value) noexcept override;
 
  private:
   double threshold_;

@@ -1,0 +1,190 @@
+#include "uhaptics/renderers/tau_policy.hpp"
+
+#include <cmath>
+
+#include "uhaptics/core/limits.hpp"
+#include "uhaptics/models/tau_kinematics.hpp"
+#include "uhaptics/renderers/tau_wall_design.hpp"
+
+namespace uhaptics {
+
+TauPolicy::TauPolicy(TauModel model, const Options& options, FigureRecorder& figures)
+    : model_(std::make_unique<const TauModel>(std::move(model))),
+      figures_(figures),
+      wall_mode_(static_cast<int>(options.wall_mode)),
+      classifier_([&] {
+        TauContactClassifier::Options o = options.classifier;
+        o.servo_period = model_->servoPeriod();
+        o.nominal_stiffness = kSpringWallStiffness;
+        return o;
+      }()) {
+  centre_ = model_->homePose().head<3>();
+  data_ = std::make_unique<TauData>(*model_);
+  // LQR gains at the workspace centre (paper 001 linearizes at one operating point), for the
+  // undelayed plant until reset() is given the caller's command delay.
+  lqr_ = makeWall(0);
+  for (Vec6& sent : sent_) sent.setZero();
+
+  using Kind = FigureKind;
+  fig_engagements_ = figures_.declareFigure("lqr_engagements", Kind::kCount);
+  fig_releases_ = figures_.declareFigure("lqr_releases", Kind::kCount);
+  fig_held_ticks_ = figures_.declareFigure("lqr_held_ticks", Kind::kCount);
+  fig_entry_depth_ = figures_.declareFigure("max_entry_depth_mm", Kind::kMaximum);
+  fig_max_penetration_ = figures_.declareFigure("max_penetration_mm", Kind::kMaximum);
+  fig_saturated_ticks_ = figures_.declareFigure("lqr_saturated_ticks", Kind::kCount);
+  fig_spring_ticks_ = figures_.declareFigure("spring_contact_ticks", Kind::kCount);
+  fig_soft_contacts_ = figures_.declareFigure("soft_surface_contacts", Kind::kCount);
+  fig_soft_stiffness_ = figures_.declareFigure("soft_stiffness_max_N_per_m", Kind::kMaximum);
+  fig_overloads_ = figures_.declareFigure("lqr_overloads", Kind::kCount);
+}
+
+std::string TauPolicy::name() const {
+  if (lqr_engaged_.load()) return "LQR wall";
+  return wallMode() == WallMode::kSpring ? "spring (J^T F)" : "spring (J^T F), LQR wall on stiff contact";
+}
+
+std::unique_ptr<LqrWallRenderer> TauPolicy::makeWall(int delay) const {
+  LqrWallRenderer::Options wall_options;
+  wall_options.keep_direction = true;
+  const LqrWallDesign design = designLqrWall(*model_, model_->homePose(), {}, observerNoiseForDelay(delay), delay);
+  return std::make_unique<LqrWallRenderer>(*model_, design.gains, wall_options);
+}
+
+void TauPolicy::reset(int command_delay) {
+  if (command_delay != wall_delay_) {
+    lqr_ = makeWall(command_delay);
+    wall_delay_ = command_delay;
+  }
+  lqr_->reset();
+  for (Vec6& sent : sent_) sent.setZero();
+  data_->pose = model_->homePose();  // forward kinematics' first guess
+  classifier_.reset();
+  lqr_engaged_ = false;
+  tau_.setZero();
+}
+
+void TauPolicy::sense(const SensedJoints& reading, SensedState& state) noexcept {
+  q_ = Eigen::Map<const Vec6>(reading.positions);
+  sense_fault_ = model_->forward(q_, *data_);  // the wall and the scene work from the encoders
+  if (sense_fault_ != Fault::kNone) return;    // the last assembled state stays
+  // Rates through the Jacobian. The angular rates are pose-angle rates; within the TAU's +-10 deg
+  // they are the angular velocity to within 2 %.
+  const Vec6& pose = data_->pose;
+  const Vec6 rates = data_->J * Eigen::Map<const Vec6>(reading.rates);
+  state.position = pose.head<3>() - centre_;
+  state.rotation = PoseRotation(pose).R;
+  state.linear_velocity = rates.head<3>();
+  state.angular_velocity = rates.tail<3>();
+  state.joints = q_;
+}
+
+void TauPolicy::checkFirstReading() const {
+  if (sense_fault_ != Fault::kNone) {
+    throw Error("TAU: the first joint reading does not assemble (forward kinematics fails)");
+  }
+}
+
+void TauPolicy::readingLost() noexcept {
+  tau_.setZero();
+  for (Vec6& sent : sent_) sent.setZero();  // the device is held at zero meanwhile
+  lqr_engaged_ = false;
+  classifier_.holdLost();
+}
+
+void TauPolicy::endSession() noexcept {
+  tau_.setZero();
+  lqr_engaged_ = false;
+  classifier_.endContact();  // no release counted: the session ends
+  explicit_.active = false;
+}
+
+bool TauPolicy::contactSurface(Vec3& point, Vec3& normal) const noexcept {
+  const SurfaceContact& surface = classifier_.surface();
+  if (!surface.active) return false;
+  point = surface.point - centre_;  // model frame -> device frame
+  normal = surface.normal;
+  return true;
+}
+
+void TauPolicy::setContactSurface(bool active, const Vec3& point, const Vec3& normal) noexcept {
+  const double length = normal.norm();
+  explicit_surface_ = true;
+  explicit_.active = active && point.allFinite() && std::isfinite(length) && length > 0.0;
+  if (explicit_.active) {
+    explicit_.point = point + centre_;  // device frame -> model frame
+    explicit_.normal = normal / length;
+  }
+}
+
+void TauPolicy::clearContactSurface() noexcept {
+  explicit_surface_ = false;
+  explicit_.active = false;
+  if (classifier_.endContact()) figures_.count(fig_releases_);
+}
+
+void TauPolicy::recordFigures(const TauContactClassifier::Events& events, const Vec3& force) noexcept {
+  if (events.engaged) figures_.count(fig_engagements_);
+  if (events.released) figures_.count(fig_releases_);
+  if (events.overload) figures_.count(fig_overloads_);
+  if (events.soft_contact) {
+    figures_.count(fig_soft_contacts_);
+    figures_.observeMaximum(fig_soft_stiffness_, events.soft_stiffness);
+  }
+  if (events.held) {
+    figures_.count(fig_held_ticks_);
+    if (events.hold_started) figures_.observeMaximum(fig_entry_depth_, events.entry_depth * 1e3);
+    figures_.observeMaximum(fig_max_penetration_, events.penetration * 1e3);
+    if (events.saturated) figures_.count(fig_saturated_ticks_);
+  } else if (force.norm() >= 0.5 * classifier_.options().contact_force) {
+    figures_.count(fig_spring_ticks_);
+  }
+}
+
+Fault TauPolicy::render(const SceneInput& input, double* efforts) noexcept {
+  // input.dt is the model's servo period (the classifier is built for it).
+  const Vec3 reported = input.seen_position + centre_;  // model frame
+  Fault fault = sense_fault_;
+  if (fault == Fault::kNone) {
+    if (explicit_surface_) {
+      classifier_.follow(explicit_);
+    } else {
+      // The scene computed its force from the position reported after the previous period.
+      classifier_.update(input.force, reported, wallMode());
+    }
+    const SurfaceContact& surface = classifier_.surface();
+    // sense() solved the forward kinematics of q_ (sense_fault_ is kNone): the wall reuses them.
+    const WallCommand& wall = lqr_->tick(q_, surface, *data_, &sent_[wall_delay_]);
+    fault = wall.fault;
+    tau_ = wall.torque;
+    classifier_.wallTicked(wall);
+    const TauContactClassifier::Events& events = classifier_.events();
+    lqr_engaged_ = explicit_surface_ ? events.held : classifier_.state() == TauContactClassifier::State::kLqr;
+    recordFigures(events, input.force);
+    if (events.held) {
+      if (!explicit_surface_) {
+        // The scene's force across the wall's normal (a second face of a concave edge or corner,
+        // friction, a mesh's facets): rendered as sent, by the spring.
+        const Vec3 across = input.force - surface.normal.dot(input.force) * surface.normal;
+        tau_.noalias() += data_->J.topRows<3>().transpose() * across;
+        clampSymmetric(tau_, model_->effortLimits());
+      }
+    } else {
+      Vec6 wrench;
+      wrench << input.force, input.torque;
+      tau_.noalias() += data_->J.transpose() * wrench;  // the scene's spring (the baseline)
+      scaleIntoBox(tau_, model_->effortLimits());
+    }
+  }
+  if (fault != Fault::kNone || !tau_.allFinite()) {
+    tau_.setZero();
+    classifier_.holdLost();
+    if (fault == Fault::kNone) fault = Fault::kNonFiniteResult;
+  }
+  for (int i = wall_delay_; i > 0; --i) sent_[i] = sent_[i - 1];
+  sent_[0] = tau_;
+  Eigen::Map<Vec6> out(efforts);
+  out = tau_;
+  return fault;
+}
+
+}  // namespace uhaptics
