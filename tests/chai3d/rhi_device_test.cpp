@@ -3,7 +3,7 @@
 // options from code and from the config file, the statistics file, no allocation per tick.
 #include <catch2/catch.hpp>
 #include <Eigen/Cholesky>
-#include <Eigen/SVD>
+#include "uhaptics/core/decompositions.hpp"  // the fixed-size SVDs, compiled once
 #include <cmath>
 #include <cstdio>
 #include <fstream>

@@ -1,7 +1,7 @@
 #include "uhaptics/core/lu_condition.hpp"
 
 #include <Eigen/LU>
-#include <Eigen/SVD>
+#include "uhaptics/core/decompositions.hpp"  // the fixed-size SVDs, compiled once
 #include <catch2/catch.hpp>
 #include <random>
 

@@ -6,6 +6,7 @@
 #include <random>
 
 #include "rhi_fixtures.hpp"
+#include "uhaptics/core/decompositions.hpp"
 #include "uhaptics/experiments/rhi_experiments.hpp"
 
 using namespace uhaptics;
@@ -21,8 +22,10 @@ bool sameDirection(const Vec<4>& tau_null, const Vec<4>& command) {
 
 // The major axis (unit, sign-free) of a desired ellipsoid.
 Vec2 majorAxis(const Mat2& ellipsoid) {
-  Eigen::SelfAdjointEigenSolver<Mat2> eig(ellipsoid);
-  return eig.eigenvectors().col(1);
+  Vec2 lambda;
+  Mat2 vectors;
+  REQUIRE(symmetricEigen(ellipsoid, lambda, &vectors));
+  return vectors.col(1);
 }
 }  // namespace
 

@@ -3,7 +3,7 @@
 // states, extreme gains and time stamps, and long randomized interaction runs on the simulated
 // linkages with an energy balance at the hand and at the actuators.
 #include <catch2/catch.hpp>
-#include <Eigen/SVD>
+#include "uhaptics/core/decompositions.hpp"  // the fixed-size SVDs, compiled once
 #include <cmath>
 
 #include "device_models.hpp"

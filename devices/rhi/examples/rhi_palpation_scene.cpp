@@ -11,7 +11,6 @@
 //                                                          were touched, the ellipse left its free
 //                                                          shape on stiff tissue, and no tick faulted
 //   UHAPTICS_CONFIG=cfg.json uhaptics-scene-rhi ...        device options from "options/rhi/..." in cfg.json
-#include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <array>
 #include <atomic>
@@ -23,6 +22,7 @@
 #include <GLFW/glfw3.h>
 
 #include "uhaptics/chai3d/CRedundantPlanarDevice.hpp"
+#include "uhaptics/core/decompositions.hpp"
 #include "uhaptics/core/force_manipulability.hpp"
 
 using namespace chai3d;
@@ -99,7 +99,9 @@ int main(int argc, char** argv) {
     Model::Jacobian J;
     model.jacobian(model.homeJoints(), J);
     if (!uhaptics::fme::weightedFme<2, 4>(J, inv_limits_sq, home_fme)) throw uhaptics::Error("RHI singular at home");
-    const double axis_scale = 0.3 * r / std::sqrt(Eigen::SelfAdjointEigenSolver<uhaptics::Mat2>(home_fme).eigenvalues()(1));
+    uhaptics::Vec2 home_axes;  // ascending
+    uhaptics::symmetricEigen(home_fme, home_axes);
+    const double axis_scale = 0.3 * r / std::sqrt(home_axes(1));
     std::array<cShapeLine*, 4> links{};
     for (auto& link : links) {
       link = new cShapeLine(cVector3d(0, 0, 0), cVector3d(0, 0, 0));
@@ -166,10 +168,12 @@ int main(int argc, char** argv) {
       model.jacobian(q, Jq);
       uhaptics::Mat2 fme;
       if (uhaptics::fme::weightedFme<2, 4>(Jq, inv_limits_sq, fme)) {
-        Eigen::SelfAdjointEigenSolver<uhaptics::Mat2> eig(fme);
-        const uhaptics::Vec2 major = eig.eigenvectors().col(1);
+        uhaptics::Vec2 axes;  // ascending
+        uhaptics::Mat2 directions;
+        uhaptics::symmetricEigen(fme, axes, &directions);
+        const uhaptics::Vec2 major = directions.col(1);
         const double angle = std::atan2(-major.y(), major.x());  // task -> device (y, z) plane
-        ellipse->setRadii(0.0005, axis_scale * std::sqrt(eig.eigenvalues()(1)), axis_scale * std::sqrt(eig.eigenvalues()(0)));
+        ellipse->setRadii(0.0005, axis_scale * std::sqrt(axes(1)), axis_scale * std::sqrt(axes(0)));
         cMatrix3d R;
         R.setAxisAngleRotationRad(cVector3d(1, 0, 0), angle);
         ellipse->setLocalRot(R);

@@ -1,9 +1,9 @@
 #include "uhaptics/chai3d/CPlanarLinkageDevice.hpp"
 
-#include <Eigen/Eigenvalues>
 #include <cmath>
 
 #include "uhaptics/backends/planar_linkage_plant.hpp"
+#include "uhaptics/core/decompositions.hpp"
 
 namespace chai3d {
 namespace {
@@ -59,7 +59,9 @@ cPlanarLinkageDevice<N>::cPlanarLinkageDevice(unsigned int a_deviceNumber, const
   model.jacobian(home, J);
   const typename Model::JointVector w = model.effortLimits().cwiseInverse();
   const uhaptics::Mat2 JWWJt = J * w.cwiseAbs2().asDiagonal() * J.transpose();
-  const double lambda_max = Eigen::SelfAdjointEigenSolver<uhaptics::Mat2>(JWWJt, Eigen::EigenvaluesOnly).eigenvalues()(1);
+  uhaptics::Vec2 lambda;  // ascending
+  if (!uhaptics::symmetricEigen(JWWJt, lambda)) throw uhaptics::Error("device " + a_selection.device + ": its Jacobian at home is not finite");
+  const double lambda_max = lambda(1);
 
   setCommonSpecifications(a_title, false);
   m_specifications.m_maxLinearForce = 1.0 / std::sqrt(lambda_max);

@@ -1,13 +1,14 @@
 #include "uhaptics/core/dare.hpp"
 
 #include <Eigen/Cholesky>
-#include <Eigen/Eigenvalues>
 #include <Eigen/LU>
 #include <Eigen/QR>
 #include <cmath>
 #include <complex>
+#include <limits>
 #include <sstream>
 
+#include "uhaptics/core/decompositions.hpp"
 #include "uhaptics/core/eigenvalues.hpp"
 #include "uhaptics/core/fault.hpp"
 
@@ -146,13 +147,16 @@ bool isDetectable(const MatX& A, const MatX& Q, double rank_tolerance, std::stri
     w_inv(i) = w(i) > 0.0 ? 1.0 / w(i) : 0.0;
   }
   // Rows of C from the eigen-decomposition of Qn, dropping its null space.
-  Eigen::SelfAdjointEigenSolver<MatX> es(w_inv.asDiagonal() * Qs * w_inv.asDiagonal());
-  const double q_max = std::max(es.eigenvalues().cwiseAbs().maxCoeff(), 0.0);
+  VecX q_eigen;
+  MatX q_vectors;
+  if (!symmetricEigen(MatX(w_inv.asDiagonal() * Qs * w_inv.asDiagonal()), q_eigen, &q_vectors))
+    throw Error("DARE: Q's eigenvalues cannot be computed");
+  const double q_max = std::max(q_eigen.cwiseAbs().maxCoeff(), 0.0);
   const double cut = 1e-14 * static_cast<double>(n) * q_max;
   MatX Ct(n, 0);
   for (Eigen::Index i = 0; i < n; ++i) {
-    if (es.eigenvalues()(i) > cut) {
-      const VecX c = w.asDiagonal() * es.eigenvectors().col(i);
+    if (q_eigen(i) > cut) {
+      const VecX c = w.asDiagonal() * q_vectors.col(i);
       Ct.conservativeResize(Eigen::NoChange, Ct.cols() + 1);
       Ct.col(Ct.cols() - 1) = c / c.stableNorm();
     }
@@ -186,8 +190,9 @@ DareResult solveDare(const MatX& A, const MatX& B, const MatX& Q, const MatX& R,
   if ((R - R.transpose()).stableNorm() > 1e-12 * std::max(R.stableNorm(), 1e-300)) throw Error("DARE: R is not symmetric");
   Eigen::LLT<MatX> r_llt(R);
   if (r_llt.info() != Eigen::Success) throw Error("DARE: R is not positive definite");
-  if (Eigen::SelfAdjointEigenSolver<MatX>(Q, Eigen::EigenvaluesOnly).eigenvalues().minCoeff() < -1e-12 * q_scale)
-    throw Error("DARE: Q is not positive semidefinite");
+  VecX q_eigen;
+  if (!symmetricEigen(Q, q_eigen)) throw Error("DARE: Q is not finite");
+  if (q_eigen.minCoeff() < -1e-12 * q_scale) throw Error("DARE: Q is not positive semidefinite");
 
   // Everything below runs in balanced state units (balancingScale): x = D x_b, so A_b = D^-1 A D,
   // B_b = D^-1 B, Q_b = D Q D, P = D^-1 P_b D^-1, K = K_b D^-1. D holds powers of two, so the change
@@ -263,7 +268,8 @@ DareResult solveDare(const MatX& A, const MatX& B, const MatX& Q, const MatX& R,
       << options.max_relative_residual << ")";
     throw Error(s.str());
   }
-  const double p_min = Eigen::SelfAdjointEigenSolver<MatX>(Pb, Eigen::EigenvaluesOnly).eigenvalues().minCoeff();
+  VecX p_eigen;
+  const double p_min = symmetricEigen(Pb, p_eigen) ? p_eigen.minCoeff() : std::numeric_limits<double>::quiet_NaN();
   if (p_min < -1e-9 * std::max(Pb.stableNorm(), 1.0))
     throw Error("DARE: solution is not positive semidefinite (the pair is not stabilizable or not detectable)");
   const MatX closed = Ab - Bb * Kb;

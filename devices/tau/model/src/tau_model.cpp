@@ -1,6 +1,6 @@
 #include "uhaptics/models/tau_model.hpp"
 
-#include <Eigen/SVD>
+#include "uhaptics/core/decompositions.hpp"  // the fixed-size SVDs, compiled once
 #include <algorithm>
 #include <cmath>
 #include <sstream>

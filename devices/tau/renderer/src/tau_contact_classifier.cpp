@@ -2,9 +2,10 @@
 
 #include <algorithm>
 #include <Eigen/Cholesky>
-#include <Eigen/Eigenvalues>
 #include <cmath>
+#include <limits>
 
+#include "uhaptics/core/decompositions.hpp"
 #include "uhaptics/core/fault.hpp"
 
 namespace uhaptics {
@@ -207,8 +208,8 @@ double TauContactClassifier::ProbeFit::stiffness() const noexcept {
   // This reads k when the tool moved along the normal and across it (a quantized pose jumping
   // sideways), but only k (n.u)(1 + n.u) / 2 when it moved along one line u.
   const Mat3 k_sym = 0.5 * (k_t + k_t.transpose());
-  const Eigen::SelfAdjointEigenSolver<Mat3> eigen(k_sym, Eigen::EigenvaluesOnly);
-  const double k_matrix = eigen.eigenvalues()(2);
+  Vec3 k_eigen;  // ascending
+  const double k_matrix = symmetricEigen(k_sym, k_eigen) ? k_eigen(2) : std::numeric_limits<double>::quiet_NaN();
   // Along the mean force's direction (the surface's normal, friction averaged): the slope of n.F
   // against n.x. This reads k for motion along one line, and less when the tool also jumps
   // sideways (the jumps load the fit's depth but, friction aside, not its force).

@@ -11,10 +11,10 @@
 // one Frobenius product per joint once H J W W is formed. Everything here is fixed-size and
 // allocation-free; functions report failure instead of throwing so that servo code can call them.
 #include <Eigen/Cholesky>
-#include <Eigen/Eigenvalues>
 #include <cmath>
 #include <limits>
 
+#include "uhaptics/core/decompositions.hpp"
 #include "uhaptics/core/types.hpp"
 
 namespace uhaptics::fme {
@@ -38,10 +38,11 @@ bool weightedFme(const Mat<M, N>& J, const Vec<N>& inv_limits_sq, Mat<M, M>& Mha
                  double min_inverse_condition = 1e-8) noexcept {
   const Mat<M, M> A = weightedVelocityEllipsoid(J, inv_limits_sq);
   if (!A.allFinite()) return false;
-  Eigen::SelfAdjointEigenSolver<Mat<M, M>> eig(A);
-  const auto& lambda = eig.eigenvalues();  // ascending
+  Vec<M> lambda;  // ascending
+  Mat<M, M> V;
+  if (!symmetricEigen(A, lambda, &V)) return false;
   if (!(lambda(M - 1) > 0.0) || !(lambda(0) > min_inverse_condition * lambda(M - 1))) return false;
-  Mhat = eig.eigenvectors() * lambda.cwiseInverse().asDiagonal() * eig.eigenvectors().transpose();
+  Mhat = V * lambda.cwiseInverse().asDiagonal() * V.transpose();
   return true;
 }
 
@@ -116,8 +117,9 @@ struct EllipsoidScales {
 };
 template <int M>
 EllipsoidScales ellipsoidScales(const Mat<M, M>& Mhat_home, double mu) noexcept {
-  Eigen::SelfAdjointEigenSolver<Mat<M, M>> eig(Mhat_home, Eigen::EigenvaluesOnly);
-  return {mu * eig.eigenvalues()(M - 1), eig.eigenvalues()(0) / mu};
+  Vec<M> lambda;  // ascending
+  if (!symmetricEigen(Mhat_home, lambda)) lambda.setConstant(std::numeric_limits<double>::quiet_NaN());
+  return {mu * lambda(M - 1), lambda(0) / mu};
 }
 
 /// Largest force magnitude the joints can exert along direction u without any |tau_i| > T_i:

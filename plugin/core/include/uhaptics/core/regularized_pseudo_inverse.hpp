@@ -3,10 +3,10 @@
 // singular-value-dependent damping (see regularized_solve.hpp), so that
 // regularizedPseudoInverse(A) * r == regularizedSolve(A, r). Used where the same pseudo-inverse is
 // applied to several vectors or needed as a matrix (projectors, impedance analysis).
-#include <Eigen/SVD>
 #include <cmath>
 #include <limits>
 
+#include "uhaptics/core/decompositions.hpp"  // the fixed-size SVDs, compiled once
 #include "uhaptics/core/regularized_solve.hpp"
 
 namespace uhaptics {

@@ -8,10 +8,10 @@
 // lambda^2 = (1 - (s_min / (epsilon s_max))^2) (lambda_max s_max)^2 grows smoothly, which bounds
 // |x| <= |r| / (2 lambda) and keeps the output continuous through a singularity. Both thresholds
 // are relative to s_max so that matrices with mixed units (m vs rad) are treated alike.
-#include <Eigen/SVD>
 #include <cmath>
 #include <limits>
 
+#include "uhaptics/core/decompositions.hpp"  // the fixed-size SVDs, compiled once
 #include "uhaptics/core/types.hpp"
 
 namespace uhaptics {

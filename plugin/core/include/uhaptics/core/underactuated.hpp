@@ -18,9 +18,9 @@
 //
 // The nonlinear subspace proxy (eq. 6) is in subspace_proxy_solver.hpp.
 #include <cmath>
-#include <Eigen/Eigenvalues>
 #include <limits>
 
+#include "uhaptics/core/decompositions.hpp"
 #include "uhaptics/core/fault.hpp"
 #include "uhaptics/core/regularized_pseudo_inverse.hpp"
 #include "uhaptics/core/regularized_solve.hpp"
@@ -154,8 +154,8 @@ bool isPassive(const Mat<N, N>& K, const Mat<A, N>& S, double tol = 0.0) noexcep
   } else {
     const Mat<A, A> sym = 0.5 * (Ka + Ka.transpose());
     // Gershgorin is conservative; the sizes here are tiny, so use the exact largest eigenvalue.
-    Eigen::SelfAdjointEigenSolver<Mat<A, A>> eig(sym, Eigen::EigenvaluesOnly);
-    return eig.eigenvalues().maxCoeff() <= tol;
+    Vec<A> lambda;
+    return symmetricEigen(sym, lambda) && lambda.maxCoeff() <= tol;
   }
 }
 

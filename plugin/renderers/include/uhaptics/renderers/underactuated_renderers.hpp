@@ -25,10 +25,10 @@
 // s_min / s_max below `singular_threshold` (1e-9: rank lost, not just ill-conditioned) is too, and
 // the nonlinear solve reports Fault::kNotConverged (it accepts only undamped final steps). The
 // transpose-based baselines stay finite and bounded without a fault.
-#include <Eigen/Eigenvalues>
 #include <limits>
 #include <string>
 
+#include "uhaptics/core/decompositions.hpp"
 #include "uhaptics/core/fault.hpp"
 #include "uhaptics/core/kinematic_model.hpp"
 #include "uhaptics/core/limits.hpp"
@@ -72,8 +72,9 @@ void requireSymmetricPsd(const Mat<R, R>& Z, const char* name) {
   if (!Z.allFinite()) throw Error(std::string(name) + " has non-finite entries");
   if (!Z.isApprox(Z.transpose(), 1e-12) && !(Z - Z.transpose()).isZero(1e-12))
     throw Error(std::string(name) + " must be symmetric");
-  Eigen::SelfAdjointEigenSolver<Mat<R, R>> eig(Z, Eigen::EigenvaluesOnly);
-  if (eig.eigenvalues().minCoeff() < -1e-12 * std::max(1.0, eig.eigenvalues().cwiseAbs().maxCoeff()))
+  Vec<R> lambda;
+  if (!symmetricEigen(Z, lambda)) throw Error(std::string(name) + ": its eigenvalues cannot be computed");
+  if (lambda.minCoeff() < -1e-12 * std::max(1.0, lambda.cwiseAbs().maxCoeff()))
     throw Error(std::string(name) + " must be positive semi-definite (a negative stiffness is active)");
 }
 }  // namespace detail
