@@ -6,14 +6,9 @@
 #include "chai3d.h"
 #include "devices/CMyCustomDevice.h"
 #include "uhaptics/chai3d/device_registry.hpp"
+#include "uhaptics/chai3d/vector_conversions.hpp"
 
 using namespace chai3d;
-
-namespace {
-
-uhaptics::Vec3 toEigen(const cVector3d& v) { return uhaptics::Vec3(v.x(), v.y(), v.z()); }
-
-}  // namespace
 
 TEST_CASE("registry devices: specification complete and consistent", "[chai3d][contract]") {
   for (const std::string& name : uhaptics::adapter::deviceNames()) {

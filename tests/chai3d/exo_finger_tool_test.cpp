@@ -7,6 +7,7 @@
 
 #include "chai3d.h"
 #include "uhaptics/chai3d/CExoFingerTool.hpp"
+#include "uhaptics/chai3d/vector_conversions.hpp"
 #include "uhaptics/core/finite_difference.hpp"
 #include "uhaptics/core/passivity_observer.hpp"
 #include "uhaptics/tools/alloc_probe.hpp"
@@ -17,7 +18,7 @@ namespace {
 
 constexpr double kPointRadius = 0.001;  // m
 
-uhaptics::DeviceSelection exoSelection(bool hand) {
+uhaptics::DeviceSelection fingerToolSelection(bool hand) {
   uhaptics::DeviceSelection s;
   s.device = "exo";
   s.hand_enabled = hand;  // off: the finger rests at mid-range
@@ -25,9 +26,6 @@ uhaptics::DeviceSelection exoSelection(bool hand) {
   s.options["force_loop_lag"] = 0.0;
   return s;
 }
-
-cVector3d toChai(const uhaptics::Vec3& v) { return cVector3d(v(0), v(1), v(2)); }
-uhaptics::Vec3 toEigen(const cVector3d& v) { return uhaptics::Vec3(v(0), v(1), v(2)); }
 
 struct FingerScene {
   cWorld world;
@@ -110,7 +108,7 @@ double secondsSince(std::chrono::steady_clock::time_point a_start) {
 
 TEST_CASE("exo finger tool: phalanx Jacobians match finite differences of the points",
           "[chai3d][exo_tool]") {
-  auto device = cExoFingerDevice::create(exoSelection(false));
+  auto device = cExoFingerDevice::create(fingerToolSelection(false));
   FingerScene scene(device);
   const uhaptics::Vec2 x(0.7, 0.9);
   for (const auto& point : cExoFingerTool::defaultPoints()) {
@@ -129,7 +127,7 @@ TEST_CASE("exo finger tool: a box pressed on one phalanx loads only that phalanx
           "[chai3d][exo_tool]") {
   for (const auto phalanx : {cExoFingerTool::C_PHALANX_PROXIMAL, cExoFingerTool::C_PHALANX_MIDDLE}) {
     DYNAMIC_SECTION("phalanx " << phalanx) {
-      auto device = cExoFingerDevice::create(exoSelection(false));
+      auto device = cExoFingerDevice::create(fingerToolSelection(false));
       device->setLockStep(true);
       FingerScene scene(device);
       const uhaptics::Vec2 x = 0.5 * (device->getModel().taskLower() + device->getModel().taskUpper());
@@ -181,7 +179,7 @@ TEST_CASE("exo finger tool: a box pressed on one phalanx loads only that phalanx
 }
 
 TEST_CASE("exo finger tool: pressing into a block and releasing is passive", "[chai3d][exo_tool]") {
-  auto device = cExoFingerDevice::create(exoSelection(true));
+  auto device = cExoFingerDevice::create(fingerToolSelection(true));
   device->setLockStep(true);
   FingerScene scene(device);
   scene.addBlockUnderCentre(device->getSpecifications().m_workspaceRadius);
@@ -214,7 +212,7 @@ TEST_CASE("exo finger tool: pressing into a block and releasing is passive", "[c
 // whatever the machine's speed: the rise clock starts after t0 and is read before each frame ends.
 TEST_CASE("exo finger tool: CHAI3D's force rise ramps the joint torque up after engagement",
           "[chai3d][exo_tool]") {
-  auto device = cExoFingerDevice::create(exoSelection(false));
+  auto device = cExoFingerDevice::create(fingerToolSelection(false));
   device->setLockStep(true);
   FingerScene scene(device);
   pressProximalPhalanx(scene, device);
@@ -269,7 +267,7 @@ TEST_CASE("exo finger tool: CHAI3D's force rise ramps the joint torque up after 
 
 // A contact the tool sends as joint torque only (no Cartesian force) is still a proxy contact.
 TEST_CASE("exo finger tool: the device's renderer figures count the tool's contacts", "[chai3d][exo_tool]") {
-  auto device = cExoFingerDevice::create(exoSelection(true));
+  auto device = cExoFingerDevice::create(fingerToolSelection(true));
   device->setLockStep(true);
   FingerScene scene(device);
   scene.addBlockUnderCentre(device->getSpecifications().m_workspaceRadius);
@@ -296,7 +294,7 @@ TEST_CASE("exo finger tool: the device's renderer figures count the tool's conta
 }
 
 TEST_CASE("exo finger tool: a haptic frame allocates nothing", "[chai3d][exo_tool]") {
-  auto device = cExoFingerDevice::create(exoSelection(true));
+  auto device = cExoFingerDevice::create(fingerToolSelection(true));
   device->setLockStep(true);
   FingerScene scene(device);
   scene.addBlockUnderCentre(device->getSpecifications().m_workspaceRadius, true);

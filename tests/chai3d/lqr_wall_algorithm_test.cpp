@@ -19,7 +19,7 @@ constexpr double kToolRadius = 0.001;  // m
 // whatever LQR contact happens comes from the algorithm.
 uhaptics::DeviceSelection tauSelection() { return tauPushSelection(cTauDevice::C_TAU_WALL_SPRING); }
 
-struct Run {
+struct WallRun {
   double max_penetration = 0.0;  // m, tool centre below the proxy's contact plane
   bool lqr_engaged = false;
   int surface_frames = 0;
@@ -61,8 +61,8 @@ struct TauScene {
     tool->computeInteractionForces();
     tool->applyToDevice();
   }
-  Run run(int frames) {
-    Run result;
+  WallRun run(int frames) {
+    WallRun result;
     for (int i = 0; i < frames; ++i) {
       tick();
       result.max_penetration = std::max(result.max_penetration, top - tool->getDeviceGlobalPos().z());
@@ -84,7 +84,7 @@ TEST_CASE("LQR wall algorithm: a 12 N push into a rigid mesh stays under 1 mm, t
           "[chai3d][lqr_algorithm]") {
   TauScene lqr_scene(true);
   REQUIRE(lqr_scene.tool->start());
-  const Run lqr = lqr_scene.run(4000);  // two laps of the hand: two pushes
+  const WallRun lqr = lqr_scene.run(4000);  // two laps of the hand: two pushes
   INFO("LQR: max penetration " << lqr.max_penetration * 1e3 << " mm");
   CHECK(lqr.lqr_engaged);
   CHECK(lqr.surface_frames > 500);  // the hand pushes for about half of each lap
@@ -98,7 +98,7 @@ TEST_CASE("LQR wall algorithm: a 12 N push into a rigid mesh stays under 1 mm, t
   TauScene spring_scene(true);
   spring_scene.wall->setEnabled(false);
   REQUIRE(spring_scene.tool->start());
-  const Run spring = spring_scene.run(4000);
+  const WallRun spring = spring_scene.run(4000);
   INFO("spring: max penetration " << spring.max_penetration * 1e3 << " mm");
   if (std::getenv("UHAPTICS_TEST_REPORT") != nullptr)
     WARN("max penetration: LQR " << lqr.max_penetration * 1e3 << " mm, spring " << spring.max_penetration * 1e3 << " mm");
@@ -131,7 +131,7 @@ TEST_CASE("LQR wall algorithm: switching it off mid-contact hands back to the sp
 TEST_CASE("LQR wall algorithm: a haptic frame allocates nothing", "[chai3d][lqr_algorithm]") {
   TauScene scene(true, true);
   REQUIRE(scene.tool->start());
-  const Run warm = scene.run(1000);  // through free space and into the first push
+  const WallRun warm = scene.run(1000);  // through free space and into the first push
   REQUIRE(warm.lqr_engaged);
   uhaptics::tools::AllocationScope scope;
   for (int i = 0; i < 2000; ++i) {  // the rest of the push, release, free space, next push

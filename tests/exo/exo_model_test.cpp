@@ -12,7 +12,6 @@ using namespace uhaptics;
 
 namespace {
 const std::string kParams = test::paramsPath("exo_finger.json");
-const ExoFingerModel& model() { return test::exoModel(); }
 std::string shippedText() { return test::readFile(kParams); }
 // Replaces the first occurrence of `from` in the shipped file.
 std::string edited(const std::string& from, const std::string& to) {
@@ -28,7 +27,7 @@ ExoFingerModel::TaskVector gridPoint(const ExoFingerModel& m, int i, int j, int 
 }  // namespace
 
 TEST_CASE("shipped parameters load and describe an L16-class finger module") {
-  const auto& m = model();
+  const auto& m = test::exoModel();
   CHECK(m.effortLimits()(0) == 50.0);
   CHECK(m.jointLimits().upper(0) - m.jointLimits().lower(0) == Approx(0.050));
   CHECK(m.hostRateHz() == 500.0);
@@ -37,7 +36,7 @@ TEST_CASE("shipped parameters load and describe an L16-class finger module") {
 }
 
 TEST_CASE("analytic Jacobian matches central differences over the whole working range") {
-  const auto& m = model();
+  const auto& m = test::exoModel();
   constexpr int n = 61;
   double worst = 0.0;
   for (int i = 0; i < n; ++i) {
@@ -63,7 +62,7 @@ TEST_CASE("analytic Jacobian matches central differences over the whole working 
 }
 
 TEST_CASE("the map is one-to-one with a nonsingular Jacobian on a dense grid") {
-  const auto& m = model();
+  const auto& m = test::exoModel();
   constexpr int n = 201;  // 0.45 deg x 0.5 deg steps
   double min_abs_det = 1e300, max_abs_det = 0.0, worst_roundtrip = 0.0;
   double sign = 0.0;
@@ -117,7 +116,7 @@ TEST_CASE("the map is one-to-one with a nonsingular Jacobian on a dense grid") {
 }
 
 TEST_CASE("phalanx points follow the joint angles") {
-  const auto& m = model();
+  const auto& m = test::exoModel();
   ExoFingerPoints p;
   m.points(ExoFingerModel::TaskVector(0.0, 0.0), p);
   CHECK(p.fingertip.isApprox(Vec2(0.073, 0.0)));

@@ -14,15 +14,14 @@ using namespace uhaptics;
 using Model = ExoFingerModel;
 
 namespace {
-const Model& model() { return test::exoModel(); }
 UnderactuatedGains<Model> gains(double zx = 1e-4, double zq = 1.0) { return test::exoGains(zx, zq); }
 Model::JointVector stateAt(double mcp_deg, double pip_deg) {
   Model::JointVector q;
-  REQUIRE(model().inverse(Model::TaskVector(mcp_deg, pip_deg) * M_PI / 180.0, q));
+  REQUIRE(test::exoModel().inverse(Model::TaskVector(mcp_deg, pip_deg) * M_PI / 180.0, q));
   return q;
 }
 const exo::Fig4Result& fig4() {
-  static const exo::Fig4Result r = exo::runFig4(model(), exo::Fig4Options{});
+  static const exo::Fig4Result r = exo::runFig4(test::exoModel(), exo::Fig4Options{});
   return r;
 }
 }  // namespace
@@ -67,7 +66,7 @@ TEST_CASE("Fig. 4 protocol, what the other methods do in practice (reported)") {
 }
 
 TEST_CASE("nonlinear and linearized subspace proxies agree for small deviations, not for large ones") {
-  const Model& m = model();
+  const Model& m = test::exoModel();
   const auto g = gains();
   LinearizedSubspaceRenderer<Model> lin(m, g);
   NonlinearSubspaceRenderer<Model> nl(m, g);
@@ -117,7 +116,7 @@ TEST_CASE("the nonlinear solve converges in a few warm-started iterations along 
 }
 
 TEST_CASE("bad input gives a fault and a zero command, never a non-finite one") {
-  const Model& m = model();
+  const Model& m = test::exoModel();
   const auto g = gains(1.0, 1.0);
   StandardRenderer<Model> st(m, g);
   NullSpaceRenderer<Model> ns(m, g);
@@ -149,7 +148,7 @@ TEST_CASE("bad input gives a fault and a zero command, never a non-finite one") 
 }
 
 TEST_CASE("commands are clamped to the actuator's force limit") {
-  const Model& m = model();
+  const Model& m = test::exoModel();
   // Z_q = 1e4 N/m over tens of mm of subspace deviation asks for hundreds of newtons.
   const auto g = gains(1e4 / (60.0 * 60.0), 1e4);
   LinearizedSubspaceRenderer<Model> lin(m, g);
@@ -168,7 +167,7 @@ TEST_CASE("commands are clamped to the actuator's force limit") {
 }
 
 TEST_CASE("invalid gains are refused at set-up with a clear message") {
-  const Model& m = model();
+  const Model& m = test::exoModel();
   auto g = gains();
   g.Zx(0, 1) = 1.0;
   CHECK_THROWS_WITH(StandardRenderer<Model>(m, g), Catch::Contains("Z_x must be symmetric"));
@@ -184,7 +183,7 @@ TEST_CASE("invalid gains are refused at set-up with a clear message") {
 }
 
 TEST_CASE("a servo tick allocates nothing, for every renderer") {
-  const Model& m = model();
+  const Model& m = test::exoModel();
   const auto g = gains();
   StandardRenderer<Model> st(m, g);
   NullSpaceRenderer<Model> ns(m, g);
@@ -215,7 +214,7 @@ TEST_CASE("near a contact (finger within 5 deg of the proxy) the linearized subs
   o.contact = true;
   o.proxy = Model::TaskVector(45.0, 50.0) * (M_PI / 180.0);
   o.contact_amplitude = 5.0 * M_PI / 180.0;
-  const exo::Fig4Result r = exo::runFig4(model(), o);
+  const exo::Fig4Result r = exo::runFig4(test::exoModel(), o);
   const auto& lin = r.summary[exo::kSubspaceLinearized];
   const auto& nl = r.summary[exo::kSubspaceNonlinear];
   REQUIRE(lin.fd_frames > 2500);
@@ -263,7 +262,7 @@ TEST_CASE("a singular Jacobian gives Fault::kSingular and a zero command where J
 }
 
 TEST_CASE("random states, in and far outside the working range: finite commands within the limit or a fault") {
-  const Model& m = model();
+  const Model& m = test::exoModel();
   auto g = gains(5.0, 2000.0);  // stiff enough that the force limit matters
   StandardRenderer<Model> st(m, g);
   NullSpaceRenderer<Model> ns(m, g);
@@ -304,7 +303,7 @@ TEST_CASE("random states, in and far outside the working range: finite commands 
 TEST_CASE("the tick from the caller's kinematics equals the tick that evaluates the model, for every renderer") {
   // A device that already evaluated forward(q, data) (its sensed state) hands x, J and the range
   // flag to the renderer; the command, the fault and the diagnostics must be those of the plain tick.
-  const Model& m = model();
+  const Model& m = test::exoModel();
   const auto g = gains(5.0, 2000.0);
   std::uint64_t seed = 777;
   const auto uniform = [&](double lo, double hi) {

@@ -13,17 +13,16 @@ using namespace uhaptics;
 using Model = ExoFingerModel;
 
 namespace {
-const Model& model() { return test::exoModel(); }
 
 UnderactuatedGains<Model> gainsWith(double zx, double zq) { return test::exoGains(zx, zq); }
 
 // Every tick either faults with an exactly-zero command, or returns a finite command within limits.
 template <class Renderer>
 void hammer(Renderer& r, stress::AdversarialSource& src, int n, stress::Tally& t) {
-  const auto& lo = model().jointLimits().lower;
-  const auto& hi = model().jointLimits().upper;
-  const auto& xlo = model().taskLower();
-  const auto& xhi = model().taskUpper();
+  const auto& lo = test::exoModel().jointLimits().lower;
+  const auto& hi = test::exoModel().jointLimits().upper;
+  const auto& xlo = test::exoModel().taskLower();
+  const auto& xhi = test::exoModel().taskUpper();
   Vec<1> tau;
   for (int i = 0; i < n; ++i) {
     const Vec2 q(src.around(lo(0), hi(0)), src.around(lo(1), hi(1)));
@@ -35,7 +34,7 @@ void hammer(Renderer& r, stress::AdversarialSource& src, int n, stress::Tally& t
       if (!tau.isZero(0.0)) ++t.violations;
     } else {
       if (r.last().clamped) ++t.clamped;
-      if (!tau.allFinite() || std::abs(tau(0)) > model().effortLimits()(0)) ++t.violations;
+      if (!tau.allFinite() || std::abs(tau(0)) > test::exoModel().effortLimits()(0)) ++t.violations;
     }
   }
 }
@@ -48,10 +47,10 @@ TEST_CASE("exo renderers: random, out-of-range and non-finite states and proxies
       nonlinear{"exo subspace (nonlinear)"};
   for (int g = 0; g < 12; ++g) {
     const auto gains = gainsWith(src.logUniform(-9, 9), src.logUniform(-9, 9));
-    StandardRenderer<Model> a(model(), gains);
-    NullSpaceRenderer<Model> b(model(), gains);
-    LinearizedSubspaceRenderer<Model> c(model(), gains);
-    NonlinearSubspaceRenderer<Model> d(model(), gains);
+    StandardRenderer<Model> a(test::exoModel(), gains);
+    NullSpaceRenderer<Model> b(test::exoModel(), gains);
+    LinearizedSubspaceRenderer<Model> c(test::exoModel(), gains);
+    NonlinearSubspaceRenderer<Model> d(test::exoModel(), gains);
     hammer(a, src, per_gain, standard);
     hammer(b, src, per_gain, nullspace);
     hammer(c, src, per_gain, linear);
@@ -67,12 +66,12 @@ TEST_CASE("exo renderers: random, out-of-range and non-finite states and proxies
 TEST_CASE("exo renderers reject invalid gains at set-up with a clear error") {
   auto g = gainsWith(1.0, 1.0);
   g.Zq(0, 0) = -1.0;
-  CHECK_THROWS_AS(NonlinearSubspaceRenderer<Model>(model(), g), Error);
+  CHECK_THROWS_AS(NonlinearSubspaceRenderer<Model>(test::exoModel(), g), Error);
   g = gainsWith(std::nan(""), 1.0);
-  CHECK_THROWS_AS(StandardRenderer<Model>(model(), g), Error);
+  CHECK_THROWS_AS(StandardRenderer<Model>(test::exoModel(), g), Error);
   g = gainsWith(1.0, 1.0);
   g.force_limit(0) = 0.0;
-  CHECK_THROWS_AS(LinearizedSubspaceRenderer<Model>(model(), g), Error);
+  CHECK_THROWS_AS(LinearizedSubspaceRenderer<Model>(test::exoModel(), g), Error);
 }
 
 namespace {
@@ -89,7 +88,7 @@ double workOverClosedLoops(Renderer& r, double rate_hz, int loops) {
   for (int k = 0; k <= n; ++k) {
     const double phase = 2.0 * M_PI * k / rate_hz;
     const Vec2 x(centre(0) + radius(0) * std::cos(phase), centre(1) + radius(1) * std::sin(phase));
-    REQUIRE(model().inverse(x, q));
+    REQUIRE(test::exoModel().inverse(x, q));
     REQUIRE(r.tick(q, proxy, tau) == Fault::kNone);
     obs.update(Vec<1>(q(0)), tau);
   }
@@ -107,8 +106,8 @@ TEST_CASE("exo energy: the subspace proxy generates no energy over closed finger
   const auto gains = gainsWith(1.0 / (48.3 * 48.3), 1000.0);  // Z_q = 1 kN/m; Z_x matched as in Fig. 4
   auto scaled = gains;
   scaled.Zx *= 1000.0;
-  NonlinearSubspaceRenderer<Model> sub1(model(), gains), sub10(model(), gains);
-  StandardRenderer<Model> std1(model(), scaled), std10(model(), scaled);
+  NonlinearSubspaceRenderer<Model> sub1(test::exoModel(), gains), sub10(test::exoModel(), gains);
+  StandardRenderer<Model> std1(test::exoModel(), scaled), std10(test::exoModel(), scaled);
   const double w_sub_1k = workOverClosedLoops(sub1, 1000.0, 5);
   const double w_sub_10k = workOverClosedLoops(sub10, 10000.0, 5);
   const double w_std_1k = workOverClosedLoops(std1, 1000.0, 5);
@@ -130,19 +129,19 @@ TEST_CASE("exo renderers never refuse a reachable proxy from a state inside the 
   // must render (a fault here would silently drop forces in ordinary use).
   stress::AdversarialSource src(7);
   const auto gains = gainsWith(1e-3, 100.0);
-  StandardRenderer<Model> a(model(), gains);
-  NullSpaceRenderer<Model> b(model(), gains);
-  LinearizedSubspaceRenderer<Model> c(model(), gains);
-  NonlinearSubspaceRenderer<Model> d(model(), gains);
-  const auto& xlo = model().taskLower();
-  const auto& xhi = model().taskUpper();
+  StandardRenderer<Model> a(test::exoModel(), gains);
+  NullSpaceRenderer<Model> b(test::exoModel(), gains);
+  LinearizedSubspaceRenderer<Model> c(test::exoModel(), gains);
+  NonlinearSubspaceRenderer<Model> d(test::exoModel(), gains);
+  const auto& xlo = test::exoModel().taskLower();
+  const auto& xhi = test::exoModel().taskUpper();
   Vec<1> tau;
   Vec2 q;
   const int n = 2000 * stress::scale();
   for (int i = 0; i < n; ++i) {
     const Vec2 x(src.uniform(xlo(0), xhi(0)), src.uniform(xlo(1), xhi(1)));
     const Vec2 xp(src.uniform(xlo(0), xhi(0)), src.uniform(xlo(1), xhi(1)));
-    REQUIRE(model().inverse(x, q));
+    REQUIRE(test::exoModel().inverse(x, q));
     CHECK(a.tick(q, xp, tau) == Fault::kNone);
     CHECK(b.tick(q, xp, tau) == Fault::kNone);
     CHECK(c.tick(q, xp, tau) == Fault::kNone);
@@ -155,17 +154,17 @@ TEST_CASE("exo renderers refuse a state the model flags outside its working rang
   // Outside the stroke or the finger's range the model's forward() is only a continuation (clamped
   // closures): rendering from it would push on a fictitious finger. Every method must refuse.
   const auto gains = gainsWith(1e-3, 100.0);
-  StandardRenderer<Model> a(model(), gains);
-  NullSpaceRenderer<Model> b(model(), gains);
-  LinearizedSubspaceRenderer<Model> c(model(), gains);
-  NonlinearSubspaceRenderer<Model> d(model(), gains);
-  const Vec2 lo = model().jointLimits().lower, hi = model().jointLimits().upper;
+  StandardRenderer<Model> a(test::exoModel(), gains);
+  NullSpaceRenderer<Model> b(test::exoModel(), gains);
+  LinearizedSubspaceRenderer<Model> c(test::exoModel(), gains);
+  NonlinearSubspaceRenderer<Model> d(test::exoModel(), gains);
+  const Vec2 lo = test::exoModel().jointLimits().lower, hi = test::exoModel().jointLimits().upper;
   const Vec2 mid = 0.5 * (lo + hi);
-  const Vec2 proxy = 0.5 * (model().taskLower() + model().taskUpper());
+  const Vec2 proxy = 0.5 * (test::exoModel().taskLower() + test::exoModel().taskUpper());
   int refused = 0;
   for (const Vec2& q : {Vec2(hi(0) + 1e-6, mid(1)), Vec2(lo(0) - 1e-6, mid(1)), Vec2(hi(0) + 0.05, mid(1)),
                         Vec2(mid(0), hi(1) + 0.3), Vec2(mid(0), lo(1) - 0.3)}) {
-    REQUIRE_FALSE(model().inWorkingRange(q));
+    REQUIRE_FALSE(test::exoModel().inWorkingRange(q));
     const auto refuses = [&](auto& renderer) {
       Vec<1> tau = Vec<1>::Constant(1.0);
       return renderer.tick(q, proxy, tau) == Fault::kOutOfRange && tau.isZero(0.0) &&
@@ -179,7 +178,7 @@ TEST_CASE("exo renderers refuse a state the model flags outside its working rang
   }
   // Back inside, every method renders again (the refusal leaves no state behind).
   Vec2 q;
-  REQUIRE(model().inverse(model().taskLower() + Model::TaskVector::Constant(0.3), q));
+  REQUIRE(test::exoModel().inverse(test::exoModel().taskLower() + Model::TaskVector::Constant(0.3), q));
   Vec<1> tau;
   CHECK(a.tick(q, proxy, tau) == Fault::kNone);
   CHECK(b.tick(q, proxy, tau) == Fault::kNone);

@@ -16,7 +16,6 @@
 using namespace uhaptics;
 
 namespace {
-const TauModel& model() { return test::tauModel(); }
 
 Vec3 randomUnit(stress::AdversarialSource& src) {
   Vec3 v(src.uniform(-1, 1), src.uniform(-1, 1), src.uniform(-1, 1));
@@ -26,8 +25,8 @@ Vec3 randomUnit(stress::AdversarialSource& src) {
 // A pose drawn from the workspace widened to three times its size, with special values (NaN, Inf,
 // 1e300, ...) 10 % of the time per coordinate.
 Vec6 adversarialPose(stress::AdversarialSource& src) {
-  const double h = model().workspaceHalfSide(), a = model().workspaceHalfAngle();
-  Vec6 p = model().homePose();
+  const double h = test::tauModel().workspaceHalfSide(), a = test::tauModel().workspaceHalfAngle();
+  Vec6 p = test::tauModel().homePose();
   for (int i = 0; i < 3; ++i) p(i) += src.around(-h, h);
   for (int i = 3; i < 6; ++i) p(i) += src.around(-a, a);
   return p;
@@ -37,8 +36,8 @@ Vec6 adversarialPose(stress::AdversarialSource& src) {
 // (mostly without any assembly: the forward kinematics must refuse it).
 Vec6 adversarialJoints(stress::AdversarialSource& src) {
   Vec6 q;
-  if (model().inverse(adversarialPose(src), q) == Fault::kNone) return q;
-  for (int i = 0; i < 6; ++i) q(i) = model().homeJoints()(i) + src.around(-0.5, 0.5);
+  if (test::tauModel().inverse(adversarialPose(src), q) == Fault::kNone) return q;
+  for (int i = 0; i < 6; ++i) q(i) = test::tauModel().homeJoints()(i) + src.around(-0.5, 0.5);
   return q;
 }
 
@@ -58,7 +57,7 @@ void judge(const WallCommand& cmd, stress::Tally& t) {
   }
   if (cmd.saturated) ++t.clamped;
   const bool within = cmd.torque.allFinite() &&
-                      (cmd.torque.cwiseAbs().array() <= model().effortLimits().array()).all();
+                      (cmd.torque.cwiseAbs().array() <= test::tauModel().effortLimits().array()).all();
   if (!within) ++t.violations;
 }
 
@@ -66,17 +65,17 @@ void judge(const WallCommand& cmd, stress::Tally& t) {
 // random motion near a random surface, glitched by adversarial readings, contacts and poses.
 template <class Renderer>
 void hammer(Renderer& r, stress::AdversarialSource& src, int episodes, int ticks, stress::Tally& t) {
-  TauData device(model());
+  TauData device(test::tauModel());
   for (int e = 0; e < episodes; ++e) {
     r.reset();
     Vec6 q = adversarialJoints(src);
     SurfaceContact c;
     c.active = src.uniform(0, 1) < 0.8;
     c.normal = randomUnit(src);
-    c.point = model().homePose().head<3>() + Vec3(src.uniform(-0.03, 0.03), src.uniform(-0.03, 0.03),
+    c.point = test::tauModel().homePose().head<3>() + Vec3(src.uniform(-0.03, 0.03), src.uniform(-0.03, 0.03),
                                                   src.uniform(-0.03, 0.03));
     Vec6 velocity;
-    for (int i = 0; i < 6; ++i) velocity(i) = src.uniform(-1.0, 1.0) * model().servoPeriod();  // up to 1 rad/s
+    for (int i = 0; i < 6; ++i) velocity(i) = src.uniform(-1.0, 1.0) * test::tauModel().servoPeriod();  // up to 1 rad/s
     for (int k = 0; k < ticks; ++k) {
       Vec6 reading = q;
       SurfaceContact ck = c;
@@ -87,7 +86,7 @@ void hammer(Renderer& r, stress::AdversarialSource& src, int episodes, int ticks
       const Vec6* pose = nullptr;
       if (src.uniform(0, 1) < 0.3) {  // the caller supplies the pose: its FK, or garbage
         if (src.uniform(0, 1) < 0.8) {
-          model().forward(reading, device);
+          test::tauModel().forward(reading, device);
         } else {
           device.pose = adversarialPose(src);
         }
@@ -113,13 +112,13 @@ TEST_CASE("TAU walls: random, out-of-range, non-finite and singular states, surf
     weights.integral = src.logUniform(0, 9);
     weights.torque = src.logUniform(0, 9);
     // Operating point anywhere in the workspace widened by half (outside: a clear refusal).
-    Vec6 op = model().homePose();
-    for (int i = 0; i < 3; ++i) op(i) += src.uniform(-1.5, 1.5) * model().workspaceHalfSide();
-    for (int i = 3; i < 6; ++i) op(i) += src.uniform(-1.5, 1.5) * model().workspaceHalfAngle();
+    Vec6 op = test::tauModel().homePose();
+    for (int i = 0; i < 3; ++i) op(i) += src.uniform(-1.5, 1.5) * test::tauModel().workspaceHalfSide();
+    for (int i = 3; i < 6; ++i) op(i) += src.uniform(-1.5, 1.5) * test::tauModel().workspaceHalfAngle();
     ++designs;
     LqrWallDesign design;
     try {
-      design = designLqrWall(model(), op, weights);
+      design = designLqrWall(test::tauModel(), op, weights);
     } catch (const Error&) {
       ++refused_designs;  // a clear refusal at set-up is an allowed answer
       continue;
@@ -129,8 +128,8 @@ TEST_CASE("TAU walls: random, out-of-range, non-finite and singular states, surf
     CHECK(gains.Kc.allFinite());
     CHECK(gains.Ki.allFinite());
     CHECK(design.report.dare_residual <= 1e-8);
-    LqrWallRenderer a(model(), gains);
-    LqrWallRenderer b(model(), gains, LqrWallRenderer::Options{2e-4, true, false, false});
+    LqrWallRenderer a(test::tauModel(), gains);
+    LqrWallRenderer b(test::tauModel(), gains, LqrWallRenderer::Options{2e-4, true, false, false});
     hammer(a, src, episodes, ticks, lqr);
     hammer(b, src, episodes, ticks, lqr_paper);
   }
@@ -138,7 +137,7 @@ TEST_CASE("TAU walls: random, out-of-range, non-finite and singular states, surf
     SpringWallRenderer::Options o;
     o.stiffness = src.logUniform(0, 9);
     o.damping = src.uniform(0, 1) < 0.5 ? 0.0 : src.logUniform(0, 9);
-    SpringWallRenderer r(model(), o);
+    SpringWallRenderer r(test::tauModel(), o);
     hammer(r, src, episodes, ticks, spring);
   }
   std::cout << "stress: tau LQR designs: " << designs << " tried, " << refused_designs
@@ -157,21 +156,21 @@ TEST_CASE("TAU walls: random, out-of-range, non-finite and singular states, surf
 TEST_CASE("TAU walls reject invalid parameters at set-up with a clear error") {
   SpringWallRenderer::Options o;
   o.stiffness = -1.0;
-  CHECK_THROWS_AS(SpringWallRenderer(model(), o), Error);
+  CHECK_THROWS_AS(SpringWallRenderer(test::tauModel(), o), Error);
   o.stiffness = std::nan("");
-  CHECK_THROWS_AS(SpringWallRenderer(model(), o), Error);
+  CHECK_THROWS_AS(SpringWallRenderer(test::tauModel(), o), Error);
   o.stiffness = 1e3;
   o.damping = std::numeric_limits<double>::infinity();
-  CHECK_THROWS_AS(SpringWallRenderer(model(), o), Error);
+  CHECK_THROWS_AS(SpringWallRenderer(test::tauModel(), o), Error);
   LqrWallWeights w;
   w.integral = 0.0;
-  CHECK_THROWS_AS(designLqrWall(model(), model().homePose(), w), Error);
+  CHECK_THROWS_AS(designLqrWall(test::tauModel(), test::tauModel().homePose(), w), Error);
   w = LqrWallWeights{};
   w.velocity = std::nan("");
-  CHECK_THROWS_AS(designLqrWall(model(), model().homePose(), w), Error);
-  Vec6 nan_pose = model().homePose();
+  CHECK_THROWS_AS(designLqrWall(test::tauModel(), test::tauModel().homePose(), w), Error);
+  Vec6 nan_pose = test::tauModel().homePose();
   nan_pose(4) = std::nan("");
-  CHECK_THROWS_AS(designLqrWall(model(), nan_pose, LqrWallWeights{}), Error);
+  CHECK_THROWS_AS(designLqrWall(test::tauModel(), nan_pose, LqrWallWeights{}), Error);
 }
 
 TEST_CASE("TAU LQR wall recovers after adversarial readings: a glitch never leaves it faulting") {
@@ -179,11 +178,11 @@ TEST_CASE("TAU LQR wall recovers after adversarial readings: a glitch never leav
   // the readings are sane again the wall renders.
   stress::AdversarialSource src(99);
   const LqrWallGains& gains = test::tauHomeGains();
-  LqrWallRenderer r(model(), gains);
-  const Vec6 q0 = model().homeJoints();
+  LqrWallRenderer r(test::tauModel(), gains);
+  const Vec6 q0 = test::tauModel().homeJoints();
   SurfaceContact c;
   c.active = true;
-  c.point = model().homePose().head<3>() + Vec3(0, 0, 0.0005);  // tool 0.5 mm inside the wall
+  c.point = test::tauModel().homePose().head<3>() + Vec3(0, 0, 0.0005);  // tool 0.5 mm inside the wall
   const int n = 200 * stress::scale();
   int stuck = 0;
   for (int i = 0; i < n; ++i) {
@@ -223,8 +222,8 @@ EnergyRun interact(Renderer& r, double tool_damping, double wall_stiffness, doub
   so.quantize = false;  // the claims are about the renderer, not the encoder (see the test case)
   so.tool_damping = tool_damping;
   so.tool_rotational_damping = 0.01;  // the handle's, as in the study: keeps the free orientation bounded
-  SimulatedTau sim(model(), so);
-  sim.reset(model().homeJoints());
+  SimulatedTau sim(test::tauModel(), so);
+  sim.reset(test::tauModel().homeJoints());
   SurfaceContact wall;
   wall.active = true;
   wall.normal = Vec3::UnitZ();
@@ -239,7 +238,7 @@ EnergyRun interact(Renderer& r, double tool_damping, double wall_stiffness, doub
       freq[d][j] = src.uniform(0.2, 2.0);
       phase[d][j] = src.uniform(0.0, 2.0 * M_PI);
     }
-  const double k_hand = 300.0, b_hand = 2.0, T = model().servoPeriod();
+  const double k_hand = 300.0, b_hand = 2.0, T = test::tauModel().servoPeriod();
   // The hand also holds the handle's orientation (0.2 N m/rad, 0.002 N m s/rad): nothing else
   // restores it, and over the x100 run (2000 s) a free orientation drifted out of the workspace.
   const double k_rot = 0.2, b_rot = 0.002;
@@ -249,7 +248,7 @@ EnergyRun interact(Renderer& r, double tool_damping, double wall_stiffness, doub
   // held in joint space over the period (tau . dq).
   PassivityObserver<3> port;
   PassivityObserver<6> wrist;
-  TauData hand(model());
+  TauData hand(test::tauModel());
   EnergyRun out;
   for (int k = 0; k < n; ++k) {
     const double t = k * T;
@@ -263,7 +262,7 @@ EnergyRun interact(Renderer& r, double tool_damping, double wall_stiffness, doub
     const Vec3 hand_on_tool = k_hand * (target - x) - b_hand * sim.toolVelocity();
     port.update(x, -hand_on_tool);  // the device's force on the hand, held over the period
     hand.pose = sim.pose();
-    REQUIRE(model().forward(sim.q(), hand) == Fault::kNone);  // J: joint rates -> pose rates
+    REQUIRE(test::tauModel().forward(sim.q(), hand) == Fault::kNone);  // J: joint rates -> pose rates
     const Vec3 angle_rates = hand.J.bottomRows<3>() * sim.qd();
     const Vec3 hand_torque = k_rot * (start_angles - sim.pose().tail<3>()) - b_rot * angle_rates;
     const Vec6 hand_joint_torque = hand.J.bottomRows<3>().transpose() * hand_torque;
@@ -277,10 +276,10 @@ EnergyRun interact(Renderer& r, double tool_damping, double wall_stiffness, doub
   }
   port.update(sim.pose().head<3>(), Vec3::Zero());  // closes the last periods
   wrist.update(sim.q(), Vec6::Zero());
-  TauData d(model());
+  TauData d(test::tauModel());
   d.pose = sim.pose();
-  REQUIRE(model().forward(sim.q(), d) == Fault::kNone);
-  REQUIRE(model().computeDynamicsTerms(sim.q(), sim.qd(), d) == Fault::kNone);
+  REQUIRE(test::tauModel().forward(sim.q(), d) == Fault::kNone);
+  REQUIRE(test::tauModel().computeDynamicsTerms(sim.q(), sim.qd(), d) == Fault::kNone);
   const double kinetic = 0.5 * sim.qd().dot(d.M * sim.qd());
   const double depth = std::max(0.0, -wall.normal.dot(sim.pose().head<3>() - wall.point));
   out.generated = port.energyOut() + wrist.energyOut() + kinetic + 0.5 * wall_stiffness * depth * depth;
@@ -308,11 +307,11 @@ TEST_CASE("TAU energy: the spring wall with the device damping generates no ener
   // device, not to the renderer, and Colgate's bound assumes an ideal position sensor.
   const double seconds = 20.0 * stress::scale();
   SpringWallRenderer::Options o;  // 6000 N/m, no rendered damping
-  SpringWallRenderer damped(model(), o), undamped(model(), o);
+  SpringWallRenderer damped(test::tauModel(), o), undamped(test::tauModel(), o);
   const EnergyRun with_b = interact(damped, 4.0, o.stiffness, seconds, 1);
   const EnergyRun without_b = interact(undamped, 0.0, o.stiffness, seconds, 1);
   const LqrWallGains& gains = test::tauHomeGains();
-  LqrWallRenderer lqr(model(), gains), lqr_undamped(model(), gains);
+  LqrWallRenderer lqr(test::tauModel(), gains), lqr_undamped(test::tauModel(), gains);
   const EnergyRun lqr_run = interact(lqr, 4.0, 0.0, seconds, 1);
   const EnergyRun lqr_undamped_run = interact(lqr_undamped, 0.0, 0.0, seconds, 1);
   printRun("spring 6000 N/m, device damping 4 N s/m", with_b);

@@ -14,9 +14,7 @@
 using namespace uhaptics;
 
 namespace {
-const TauModel& model() { return test::tauModel(); }
 const LqrWallDesign& design() { return test::tauHomeDesign(); }
-const LqrWallGains& gains() { return test::tauHomeGains(); }
 SurfaceContact wallAt(const Vec6& pose) {
   SurfaceContact c;
   c.active = true;
@@ -27,7 +25,7 @@ SurfaceContact wallAt(const Vec6& pose) {
 }  // namespace
 
 TEST_CASE("LQR wall design: fastest pole ~2480 rad/s, verified DARE, stable observer") {
-  const LqrWallGains& g = gains();
+  const LqrWallGains& g = test::tauHomeGains();
   const LqrWallDesignReport& report = design().report;
   // Paper: "around 2480 rad/s"; our weights are tuned for our assumed plant to keep it there.
   CHECK(report.fastest_pole_rad_s == Approx(2480.0).epsilon(0.05));
@@ -42,16 +40,16 @@ TEST_CASE("LQR wall design: fastest pole ~2480 rad/s, verified DARE, stable obse
 }
 
 TEST_CASE("Gain-only redesign at a contact point: same controller as a full design, observer kept") {
-  const LqrWallGains& centre = gains();
+  const LqrWallGains& centre = test::tauHomeGains();
   Mat<6, 18> C = Mat<6, 18>::Zero();
   C.block<6, 6>(0, 6).setIdentity();
-  const double h = model().workspaceHalfSide();
+  const double h = test::tauModel().workspaceHalfSide();
   for (const auto& [x, y] : {std::pair{-h, -h}, std::pair{-h, h}, std::pair{h, -h}, std::pair{h, h}}) {
-    Vec6 corner = model().homePose();
+    Vec6 corner = test::tauModel().homePose();
     corner(0) = x;
     corner(1) = y;
-    const LqrWallGains full = designLqrWall(model(), corner).gains;
-    const LqrWallGains quick = redesignLqrWallGains(model(), corner, design()).gains;
+    const LqrWallGains full = designLqrWall(test::tauModel(), corner).gains;
+    const LqrWallGains quick = redesignLqrWallGains(test::tauModel(), corner, design()).gains;
     // Same DARE, same inputs: identical up to the solver's rounding.
     CHECK((quick.Kc - full.Kc).norm() < 1e-9 * full.Kc.norm());
     CHECK((quick.Ki - full.Ki).norm() < 1e-9 * full.Ki.norm());
@@ -65,20 +63,20 @@ TEST_CASE("Gain-only redesign at a contact point: same controller as a full desi
 }
 
 TEST_CASE("LQR wall design rejects unreachable operating points with a clear error") {
-  Vec6 far = model().homePose();
+  Vec6 far = test::tauModel().homePose();
   far(2) = 0.5;
-  CHECK_THROWS_WITH(designLqrWall(model(), far), Catch::Contains("outside the reachable workspace"));
+  CHECK_THROWS_WITH(designLqrWall(test::tauModel(), far), Catch::Contains("outside the reachable workspace"));
   LqrWallWeights w;
   w.torque = 0.0;
-  CHECK_THROWS_AS(designLqrWall(model(), model().homePose(), w), Error);
-  CHECK_THROWS_WITH(redesignLqrWallGains(model(), far, design()), Catch::Contains("outside the reachable workspace"));
+  CHECK_THROWS_AS(designLqrWall(test::tauModel(), test::tauModel().homePose(), w), Error);
+  CHECK_THROWS_WITH(redesignLqrWallGains(test::tauModel(), far, design()), Catch::Contains("outside the reachable workspace"));
 }
 
 TEST_CASE("Bad input to the wall renderers: a Fault and a zero torque, never NaN") {
-  LqrWallRenderer lqr(model(), gains());
-  SpringWallRenderer spring(model());
-  const Vec6 q = model().homeJoints();
-  const SurfaceContact contact = wallAt(model().homePose());
+  LqrWallRenderer lqr(test::tauModel(), test::tauHomeGains());
+  SpringWallRenderer spring(test::tauModel());
+  const Vec6 q = test::tauModel().homeJoints();
+  const SurfaceContact contact = wallAt(test::tauModel().homePose());
   SECTION("non-finite joint reading") {
     Vec6 bad = q;
     bad(3) = std::numeric_limits<double>::quiet_NaN();
@@ -117,18 +115,18 @@ TEST_CASE("Bad input to the wall renderers: a Fault and a zero torque, never NaN
 TEST_CASE("Wall renderer ticks are allocation-free and free-space ticks skip the contact work") {
   SimulatedTauOptions so;
   so.tool_rotational_damping = 0.01;  // the handle's, as cTauDevice simulates it
-  SimulatedTau sim(model(), so);
-  LqrWallRenderer lqr(model(), gains());
-  SpringWallRenderer spring(model());
-  TauData device(model());
-  SurfaceContact contact = wallAt(model().homePose());
+  SimulatedTau sim(test::tauModel(), so);
+  LqrWallRenderer lqr(test::tauModel(), test::tauHomeGains());
+  SpringWallRenderer spring(test::tauModel());
+  TauData device(test::tauModel());
+  SurfaceContact contact = wallAt(test::tauModel().homePose());
   Vec6 tau = Vec6::Zero();
   // Warm up (first-use static initialization is allowed to allocate).
   tau = lqr.tick(sim.encoderReading(), contact).torque;
   spring.tick(sim.encoderReading(), contact);
   tools::AllocationScope scope;
   for (int k = 0; k < 200; ++k) {
-    model().forward(sim.encoderReading(), device);
+    test::tauModel().forward(sim.encoderReading(), device);
     contact.point = Vec3(device.pose(0), device.pose(1), 0.0);
     tau = lqr.tick(sim.encoderReading(), contact, &device.pose).torque;
     spring.tick(sim.encoderReading(), contact, &device.pose);
@@ -138,11 +136,11 @@ TEST_CASE("Wall renderer ticks are allocation-free and free-space ticks skip the
   CHECK(lqr.command().in_contact);
   // Free space: inactive contact gives exactly the gravity compensation (no LQR term).
   SurfaceContact none;
-  LqrWallRenderer fresh(model(), gains());
+  LqrWallRenderer fresh(test::tauModel(), test::tauHomeGains());
   const WallCommand& cmd = fresh.tick(sim.encoderReading(), none);
-  TauData d(model());
-  model().forward(sim.encoderReading(), d);
-  model().computeGravity(sim.encoderReading(), d);
+  TauData d(test::tauModel());
+  test::tauModel().forward(sim.encoderReading(), d);
+  test::tauModel().computeGravity(sim.encoderReading(), d);
   CHECK(!cmd.in_contact);
   CHECK((cmd.torque - d.gravity).norm() < 1e-12);
 }
@@ -152,8 +150,8 @@ namespace {
 double stepPenetration(const Vec3& normal) {
   SimulatedTauOptions so;
   so.quantize = false;
-  SimulatedTau sim(model(), so);
-  LqrWallRenderer lqr(model(), gains());
+  SimulatedTau sim(test::tauModel(), so);
+  LqrWallRenderer lqr(test::tauModel(), test::tauHomeGains());
   SurfaceContact c;
   c.active = true;
   c.normal = normal;
@@ -193,15 +191,15 @@ struct SaturatedPush {
 SaturatedPush saturatedPush(bool keep_direction, double push) {
   SimulatedTauOptions so;
   so.tool_rotational_damping = 0.01;
-  SimulatedTau sim(model(), so);
+  SimulatedTau sim(test::tauModel(), so);
   LqrWallRenderer::Options options;
   options.keep_direction = keep_direction;
-  LqrWallRenderer lqr(model(), gains(), options);
+  LqrWallRenderer lqr(test::tauModel(), test::tauHomeGains(), options);
   SurfaceContact c;
   c.active = true;
   c.normal = Vec3(std::sin(M_PI / 6), 0, std::cos(M_PI / 6));
   c.point = sim.pose().head<3>();
-  TauData data(model());
+  TauData data(test::tauModel());
   SaturatedPush result;
   for (int k = 0; k < 1000; ++k) {
     const WallCommand& cmd = lqr.tick(sim.encoderReading(), c);
@@ -214,8 +212,8 @@ SaturatedPush saturatedPush(bool keep_direction, double push) {
     result.side = std::max(result.side, (offset - c.normal.dot(offset) * c.normal).norm());
     if (cmd.saturated && cmd.in_contact) {
       data.pose = sim.pose();
-      REQUIRE(model().forward(sim.encoderReading(), data) == Fault::kNone);
-      model().computeGravity(sim.encoderReading(), data);
+      REQUIRE(test::tauModel().forward(sim.encoderReading(), data) == Fault::kNone);
+      test::tauModel().computeGravity(sim.encoderReading(), data);
       const Vec3 force = data.J.transpose().partialPivLu().solve(cmd.torque - data.gravity).head<3>();
       ++result.saturated_ticks;
       result.worst_sine = std::max(result.worst_sine, force.normalized().cross(c.normal).norm());

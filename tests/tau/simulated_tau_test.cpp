@@ -15,7 +15,6 @@
 using namespace uhaptics;
 
 namespace {
-const TauModel& model() { return test::tauModel(); }
 
 /// The same device with its plant refreshed (kinematics, J, M, gravity) every `period` seconds.
 TauModel modelWithPlantPeriod(double period, int substeps) {
@@ -33,7 +32,7 @@ enum class Wall { kSpring, kLqr };
 /// of `plant` per servo tick.
 std::vector<double> trajectory(Wall wall, const TauModel& plant, int substeps, int plant_steps_per_tick,
                                double relinearize = 0.0, double* worst_closure = nullptr) {
-  const TauModel& m = model();
+  const TauModel& m = test::tauModel();
   const LqrWallGains& gains = test::tauHomeGains();
   SimulatedTauOptions so;
   so.substeps = substeps;
@@ -90,11 +89,11 @@ double maxAbs(const std::vector<double>& a) {
 }  // namespace
 
 TEST_CASE("Simulated TAU: halving the substep changes the trajectory by < 2 % of the penetration") {
-  REQUIRE(model().simulationSubsteps() == 10);
+  REQUIRE(test::tauModel().simulationSubsteps() == 10);
   for (Wall wall : {Wall::kSpring, Wall::kLqr}) {
-    const auto z5 = trajectory(wall, model(), 5, 1);
-    const auto z10 = trajectory(wall, model(), 10, 1);
-    const auto z20 = trajectory(wall, model(), 20, 1);
+    const auto z5 = trajectory(wall, test::tauModel(), 5, 1);
+    const auto z10 = trajectory(wall, test::tauModel(), 10, 1);
+    const auto z20 = trajectory(wall, test::tauModel(), 20, 1);
     const double peak = maxAbs(z20);
     const double d_coarse = maxDifference(z5, z10), d_default = maxDifference(z10, z20);
     const double peak_change = std::abs(maxAbs(z10) - peak);
@@ -117,9 +116,9 @@ TEST_CASE("Simulated TAU: refreshing the plant once per servo period is converge
   // The multi-rate integration freezes kinematics, J, M and gravity over each servo period. The same
   // run with the plant refreshed 4x as often (same 50 us integration step) must agree to well under
   // one encoder count at the tool (0.0015 rad x 80 mm ~ 0.1 mm); we require 1 % of the penetration.
-  const TauModel quarter = modelWithPlantPeriod(0.25 * model().servoPeriod(), 5);
+  const TauModel quarter = modelWithPlantPeriod(0.25 * test::tauModel().servoPeriod(), 5);
   for (Wall wall : {Wall::kSpring, Wall::kLqr}) {
-    const auto once = trajectory(wall, model(), 20, 1);
+    const auto once = trajectory(wall, test::tauModel(), 20, 1);
     const auto four = trajectory(wall, quarter, 5, 4);
     const double peak = maxAbs(four);
     INFO((wall == Wall::kLqr ? "LQR" : "spring") << " wall: peak penetration " << peak * 1e3 << " mm, difference "
@@ -136,15 +135,15 @@ TEST_CASE("Simulated TAU: holding the plant's linearization within 1e-3 rad chan
   // penetration (measured: spring 0.002 %, LQR 0.05 %), and the pose must close the loop to the
   // forward kinematics' tolerance.
   for (Wall wall : {Wall::kSpring, Wall::kLqr}) {
-    const auto every = trajectory(wall, model(), 10, 1);
+    const auto every = trajectory(wall, test::tauModel(), 10, 1);
     double closure = 0.0;
-    const auto held = trajectory(wall, model(), 10, 1, 1e-3, &closure);
+    const auto held = trajectory(wall, test::tauModel(), 10, 1, 1e-3, &closure);
     const double peak = maxAbs(every);
     INFO((wall == Wall::kLqr ? "LQR" : "spring") << " wall: peak penetration " << peak * 1e3 << " mm, difference "
                                                  << maxDifference(every, held) << " m, closure residual up to "
                                                  << closure << " m");
     CHECK(maxDifference(every, held) < 0.001 * peak);
-    CHECK(closure <= model().fkTolerance());
+    CHECK(closure <= test::tauModel().fkTolerance());
     CHECK(maxDifference(every, held) > 0.0);  // some periods were held
   }
 }
@@ -153,7 +152,7 @@ TEST_CASE("Simulated TAU: a relinearize tolerance that is negative, too large or
   for (const double tolerance : {-1e-4, 0.2, std::numeric_limits<double>::quiet_NaN()}) {
     SimulatedTauOptions so;
     so.relinearize_tolerance = tolerance;
-    CHECK_THROWS_WITH(SimulatedTau(model(), so), Catch::Contains("relinearize_tolerance must be in [0, 0.1] rad"));
+    CHECK_THROWS_WITH(SimulatedTau(test::tauModel(), so), Catch::Contains("relinearize_tolerance must be in [0, 0.1] rad"));
   }
 }
 
@@ -167,14 +166,14 @@ TEST_CASE("Simulated TAU: a delayed plant starts from the first command, not fro
     so.max_delay_samples = 3;
     so.quantize = false;
     so.seed = seed;
-    SimulatedTau sim(model(), so);
-    sim.reset(model().homeJoints());
-    TauData data(model());
+    SimulatedTau sim(test::tauModel(), so);
+    sim.reset(test::tauModel().homeJoints());
+    TauData data(test::tauModel());
     data.pose = sim.pose();
     const Vec3 start = sim.pose().head<3>();
     for (int k = 0; k < 10; ++k) {
-      REQUIRE(model().forward(sim.q(), data) == Fault::kNone);
-      model().computeGravity(sim.q(), data);
+      REQUIRE(test::tauModel().forward(sim.q(), data) == Fault::kNone);
+      test::tauModel().computeGravity(sim.q(), data);
       REQUIRE(sim.step(data.gravity, Vec3::Zero()) == Fault::kNone);
     }
     drift = std::max(drift, (sim.pose().head<3>() - start).norm());
@@ -193,11 +192,11 @@ constexpr double kAngleMargin = 1.5 * M_PI / 180.0;
 // warm-started each step, as a simulation moving continuously would: true if every step assembles
 // in the device's own mode.
 bool assemblesAlongTheWay(const Vec6& pose) {
-  TauData data(model());
+  TauData data(test::tauModel());
   for (int k = 1; k <= 40; ++k) {
-    const Vec6 x = model().homePose() + (k / 40.0) * (pose - model().homePose());
+    const Vec6 x = test::tauModel().homePose() + (k / 40.0) * (pose - test::tauModel().homePose());
     Vec6 q;
-    if (model().inverse(x, q) != Fault::kNone || model().forward(q, data) != Fault::kNone) return false;
+    if (test::tauModel().inverse(x, q) != Fault::kNone || test::tauModel().forward(q, data) != Fault::kNone) return false;
     if ((data.pose - x).cwiseAbs().maxCoeff() > 1e-9) return false;
   }
   return true;
@@ -214,13 +213,13 @@ Excursion unpowered(bool end_stops, const Vec3& push) {
   SimulatedTauOptions so;
   so.end_stops = end_stops;
   so.tool_rotational_damping = 0.01;  // the handle's, as a board plant simulates it
-  SimulatedTau sim(model(), so);
-  sim.reset(model().homeJoints());
+  SimulatedTau sim(test::tauModel(), so);
+  sim.reset(test::tauModel().homeJoints());
   Excursion e;
   for (int k = 0; k < 3000; ++k) {
     if (sim.step(Vec6::Zero(), push) != Fault::kNone) ++e.faults;
     if (k < 2000) continue;
-    const Vec6 d = sim.pose() - model().homePose();
+    const Vec6 d = sim.pose() - test::tauModel().homePose();
     e.position = std::max(e.position, d.head<3>().cwiseAbs().maxCoeff());
     e.angle = std::max(e.angle, d.tail<3>().cwiseAbs().maxCoeff());
   }
@@ -229,14 +228,14 @@ Excursion unpowered(bool end_stops, const Vec3& push) {
 }  // namespace
 
 TEST_CASE("Simulated TAU: the end stops bound the workspace inside the assembling range") {
-  const TauModel::EndStops& stops = model().endStops();
-  CHECK(stops.half_side >= model().workspaceHalfSide());
-  CHECK(stops.half_angle >= model().workspaceHalfAngle());
+  const TauModel::EndStops& stops = test::tauModel().endStops();
+  CHECK(stops.half_side >= test::tauModel().workspaceHalfSide());
+  CHECK(stops.half_angle >= test::tauModel().workspaceHalfAngle());
   // Every corner of the stops' box, position and orientation at once, pressed 1 mm and 1.5 deg into
   // the stops (farther than the unpowered device goes, below).
   const double s = stops.half_side + kPositionMargin, a = stops.half_angle + kAngleMargin;
   for (int c = 0; c < 64; ++c) {
-    Vec6 pose = model().homePose();
+    Vec6 pose = test::tauModel().homePose();
     for (int i = 0; i < 6; ++i) pose(i) += ((c >> i) & 1 ? 1.0 : -1.0) * (i < 3 ? s : a);
     INFO("corner " << pose.transpose());
     CHECK(assemblesAlongTheWay(pose));
@@ -244,7 +243,7 @@ TEST_CASE("Simulated TAU: the end stops bound the workspace inside the assemblin
 }
 
 TEST_CASE("Simulated TAU: unpowered, it comes to rest on its end stops, never where it does not assemble") {
-  const TauModel::EndStops& stops = model().endStops();
+  const TauModel::EndStops& stops = test::tauModel().endStops();
   // Gravity alone, and a 10 N push along each axis on top of it (a hand leaning on a dead device).
   for (const Vec3& push : {Vec3(0, 0, 0), Vec3(10, 0, 0), Vec3(-10, 0, 0), Vec3(0, 10, 0), Vec3(0, -10, 0),
                            Vec3(0, 0, 10), Vec3(0, 0, -10)}) {
@@ -262,8 +261,8 @@ TEST_CASE("Simulated TAU: unpowered, it comes to rest on its end stops, never wh
 TEST_CASE("Simulated TAU: a step that would leave the assembling range stops the joints where they were") {
   SimulatedTauOptions so;
   so.quantize = false;
-  SimulatedTau sim(model(), so);
-  sim.reset(model().homeJoints());
+  SimulatedTau sim(test::tauModel(), so);
+  sim.reset(test::tauModel().homeJoints());
   // Unpowered without stops and pushed hard, until a period faults.
   Fault f = Fault::kNone;
   Vec6 q_before = sim.q(), pose_before = sim.pose();
@@ -277,7 +276,7 @@ TEST_CASE("Simulated TAU: a step that would leave the assembling range stops the
   CHECK(sim.qd().isZero());
   // pose() is still the solution at q(): the inverse maps it back to the joints.
   Vec6 q_back;
-  REQUIRE(model().inverse(sim.pose(), q_back) == Fault::kNone);
+  REQUIRE(test::tauModel().inverse(sim.pose(), q_back) == Fault::kNone);
   CHECK((q_back - sim.q()).cwiseAbs().maxCoeff() < 1e-9);
   CHECK((sim.pose() - pose_before).cwiseAbs().maxCoeff() < 1e-9);
 }

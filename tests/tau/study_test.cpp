@@ -11,18 +11,13 @@
 using namespace uhaptics;
 using namespace uhaptics::study;
 
-namespace {
-const TauModel& model() { return test::tauModel(); }
-const LqrWallGains& gains() { return test::tauHomeGains(); }
-}  // namespace
-
 TEST_CASE("Study, reduced grid: LQR penetration < 1 mm and K_zs an order above the spring wall") {
   // Scenario 1 (the 15 N step, the hard case for the torques) at the four corners of the wall,
   // where the static torque peaks, and scenario 2 at the centre: 10 runs of 3 s, ~0.3 s CPU, kept
   // small because the sanitizer builds run it ~10x slower on shared cores (120 s ctest timeout).
   // uhaptics-tau-study covers the whole 11 x 11 grid x 20 runs.
   double lqr_pen = 0.0, lqr_kzs_min = 1e300, spring_kzs_max = 0.0;
-  const double c = model().workspaceHalfSide();
+  const double c = test::tauModel().workspaceHalfSide();
   struct Case {
     double x, y;
     Scenario scenario;
@@ -35,9 +30,9 @@ TEST_CASE("Study, reduced grid: LQR penetration < 1 mm and K_zs an order above t
     spec.y = k.y;
     spec.seed = 11;
     spec.scenario = k.scenario;
-    const RunMetrics lqr = simulateRun(model(), gains(), spec);
+    const RunMetrics lqr = simulateRun(test::tauModel(), test::tauHomeGains(), spec);
     spec.controller = Controller::kSpring;
-    const RunMetrics spring = simulateRun(model(), gains(), spec);
+    const RunMetrics spring = simulateRun(test::tauModel(), test::tauHomeGains(), spec);
     INFO("x " << k.x << " y " << k.y << " scenario " << static_cast<int>(k.scenario));
     CHECK(lqr.fault == Fault::kNone);
     // The baseline renders only the normal spring; its free directions stay in the workspace
@@ -58,12 +53,12 @@ TEST_CASE("Study runs are exactly repeatable for a seed") {
   RunSpec spec;
   spec.seed = 99;
   spec.max_delay_samples = 3;
-  const RunMetrics a = simulateRun(model(), gains(), spec);
-  const RunMetrics b = simulateRun(model(), gains(), spec);
+  const RunMetrics a = simulateRun(test::tauModel(), test::tauHomeGains(), spec);
+  const RunMetrics b = simulateRun(test::tauModel(), test::tauHomeGains(), spec);
   CHECK(a.d_z1 == b.d_z1);
   CHECK(a.k_zs == b.k_zs);
   spec.seed = 100;
-  CHECK(simulateRun(model(), gains(), spec).force_level != a.force_level);
+  CHECK(simulateRun(test::tauModel(), test::tauHomeGains(), spec).force_level != a.force_level);
 }
 
 namespace {
@@ -84,17 +79,17 @@ Interaction interact(bool quantize) {
   // tool's position, and after lift-off nothing else keeps its orientation from drifting on the
   // encoders' quantization.
   so.tool_rotational_damping = 0.01;
-  SimulatedTau sim(model(), so);
-  LqrWallRenderer renderer(model(), gains());
-  TauData device(model());
+  SimulatedTau sim(test::tauModel(), so);
+  LqrWallRenderer renderer(test::tauModel(), test::tauHomeGains());
+  TauData device(test::tauModel());
   SurfaceContact contact;
   Vec3 hand = sim.pose().head<3>();
   Interaction out;
   double x_start = 0.0;
   for (int k = 0; k < 2500; ++k) {
     const double t = k * 1e-3;
-    model().forward(sim.encoderReading(), device);
-    model().computeGravity(sim.encoderReading(), device);
+    test::tauModel().forward(sim.encoderReading(), device);
+    test::tauModel().computeGravity(sim.encoderReading(), device);
     contact.active = device.pose(2) <= 1e-3;
     contact.point = Vec3(device.pose(0), device.pose(1), 0.0);
     const WallCommand& cmd = renderer.tick(sim.encoderReading(), contact, &device.pose);
@@ -136,7 +131,7 @@ TEST_CASE("LQR wall: holds a 10 N push, lets the tool slide, releases without at
     CHECK(r.max_tangential_hand_force < 0.5);
     CHECK(r.contact_ticks_after_release == 0);
     CHECK(r.attractive_ticks == 0);
-    CHECK(r.max_height < model().workspaceHalfSide());  // the scenario stays in the workspace
+    CHECK(r.max_height < test::tauModel().workspaceHalfSide());  // the scenario stays in the workspace
   }
 }
 
@@ -150,11 +145,11 @@ TEST_CASE("Random 0-3 sample command delay: the random-delay design holds the wa
   random_delay.samples = 3;
   random_delay.random = true;
   random_delay.rate_weight = 200.0;
-  static const LqrWallDesign delay_design = designLqrWall(model(), model().homePose(), {}, {}, random_delay);
+  static const LqrWallDesign delay_design = designLqrWall(test::tauModel(), test::tauModel().homePose(), {}, {}, random_delay);
   const LqrWallGains& delay_gains = delay_design.gains;
   REQUIRE(delay_gains.random_command_delay);
   CHECK(delay_design.report.ms_spectral_radius < 1.0);  // mean-square stable under the random delay
-  const double c = model().workspaceHalfSide();
+  const double c = test::tauModel().workspaceHalfSide();
   double pen = 0.0, steady_told = 0.0, steady_guessed = 0.0;
   int faults_delay_aware = 0, faults_undelayed = 0;
   for (const Scenario sc : {Scenario::kStepForce, Scenario::kHand})
@@ -165,14 +160,14 @@ TEST_CASE("Random 0-3 sample command delay: the random-delay design holds the wa
       spec.y = sc == Scenario::kStepForce ? -c : 0.0;
       spec.seed = seed;
       spec.max_delay_samples = 3;
-      const RunMetrics aware = simulateRun(model(), delay_gains, spec);
+      const RunMetrics aware = simulateRun(test::tauModel(), delay_gains, spec);
       faults_delay_aware += aware.fault != Fault::kNone;
       pen = std::max(pen, aware.max_penetration);
-      faults_undelayed += simulateRun(model(), gains(), spec).fault != Fault::kNone;
+      faults_undelayed += simulateRun(test::tauModel(), test::tauHomeGains(), spec).fault != Fault::kNone;
       // The same run with the observer guessing the applied torque (the mean of the commands it
       // may have been) instead of being told it by the device.
       spec.applied_torque_known = false;
-      const RunMetrics guessed = simulateRun(model(), delay_gains, spec);
+      const RunMetrics guessed = simulateRun(test::tauModel(), delay_gains, spec);
       steady_told += aware.d_zs;
       steady_guessed += guessed.fault != Fault::kNone ? 1.0 : guessed.d_zs;
     }

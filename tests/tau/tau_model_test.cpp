@@ -12,7 +12,6 @@
 using namespace uhaptics;
 
 namespace {
-const TauModel& model() { return test::tauModel(); }
 
 // The dynamics tests' state: the joints of an off-centre pose (every coordinate moved) and a joint
 // velocity with every joint moving.
@@ -20,7 +19,7 @@ Vec6 offCentreJoints() {
   Vec6 pose;
   pose << -0.015, 0.01, -0.01, 0.05, 0.08, -0.1;
   Vec6 q;
-  REQUIRE(model().inverse(pose, q) == Fault::kNone);
+  REQUIRE(test::tauModel().inverse(pose, q) == Fault::kNone);
   return q;
 }
 Vec6 jointVelocity() {
@@ -33,7 +32,7 @@ Vec6 jointVelocity() {
 TEST_CASE("TAU model satisfies the kinematic-model interface") { STATIC_REQUIRE(kIsKinematicModel<TauModel>); }
 
 TEST_CASE("TAU workspace: 50 mm cube x +-10 deg reachable, FK inverts IK, Jacobian well conditioned") {
-  const TauModel& m = model();
+  const TauModel& m = test::tauModel();
   TauData data(m);
   const double h = m.workspaceHalfSide(), a = m.workspaceHalfAngle();
   double worst_cond = 0.0, worst_roundtrip = 0.0;
@@ -70,7 +69,7 @@ TEST_CASE("TAU statics: a 15 N + 3 sigma push anywhere on the wall needs well un
   // Paper 001's scenario 1 pushes with F_c <= 15 N plus N(0, 0.5) N noise at the tool, wall z = 0,
   // x, y in [-25, 25] mm. Holding it statically takes tau = g(q) - J^T F. The LQR wall also needs
   // headroom for the transient of the first impact, so we require at most half the saturation.
-  const TauModel& m = model();
+  const TauModel& m = test::tauModel();
   TauData data(m);
   const double h = m.workspaceHalfSide();
   const double push = 15.0 + 3.0 * 0.5;
@@ -96,7 +95,7 @@ TEST_CASE("TAU kinematics: the branch test by the signs of dg/dq agrees with the
   // Every leg flipped to its other branch in turn, at poses over the workspace: the sign test
   // (RusLegKinematics) and the round trip through inverse() (TauKinematics' default) must agree on
   // every closure solution, the own branches and each flipped one.
-  const TauModel& m = model();
+  const TauModel& m = test::tauModel();
   const auto& kin = dynamic_cast<const RusLegKinematics&>(m.kinematics());
   std::array<RusLegKinematics::Leg, 6> legs;
   for (int i = 0; i < 6; ++i) legs[i] = kin.leg(i);
@@ -128,7 +127,7 @@ TEST_CASE("TAU kinematics: the branch test by the signs of dg/dq agrees with the
 }
 
 TEST_CASE("TAU Jacobian matches finite differences of the forward kinematics") {
-  const TauModel& m = model();
+  const TauModel& m = test::tauModel();
   Vec6 pose;
   pose << 0.01, -0.02, 0.015, 0.1, -0.05, 0.12;
   Vec6 q;
@@ -147,7 +146,7 @@ TEST_CASE("TAU Jacobian matches finite differences of the forward kinematics") {
 }
 
 TEST_CASE("TAU dynamics: symmetric positive mass matrix, gravity = gradient of potential energy") {
-  const TauModel& m = model();
+  const TauModel& m = test::tauModel();
   const Vec6 q = offCentreJoints();
   TauData d(m);
   REQUIRE(m.forward(q, d) == Fault::kNone);
@@ -198,7 +197,7 @@ TEST_CASE("TAU dynamics: velocity term = mass-weighted velocity-product accelera
   // 5 mrad at either speed (h = 5e-3 s / scale): truncation ~h^4, rounding ~1e-12 m / h^2. The
   // model's closed form agrees to 2.3e-8 at both speeds; with 10 mrad steps, to 3.7e-7 (16 times
   // more: the reference's h^4 truncation is what is measured). 2e-7 leaves a factor 9.
-  const TauModel& m = model();
+  const TauModel& m = test::tauModel();
   const Vec6 q = offCentreJoints();
   const Vec6 qd = jointVelocity();
   for (const double scale : {1.0, 5.0}) {
@@ -228,7 +227,7 @@ TEST_CASE("TAU kinematics: the closure's acceleration in closed form = its secon
   // closure() over 1 mrad joint steps: truncation ~h^4 g^(6) ~ 1e-12 of g'', rounding 1e-16 m /
   // h^2. TauKinematics' own default (a three-point difference, truncation ~1e-6 relative) is the
   // same quantity for any geometry; both against the closed form of RusLegKinematics.
-  const TauModel& m = model();
+  const TauModel& m = test::tauModel();
   const TauKinematics& kin = m.kinematics();
   const Vec6 q = offCentreJoints();
   const Vec6 qd = jointVelocity();

@@ -3,6 +3,7 @@
 #include "uhaptics/backends/board_catalog.hpp"
 #include "uhaptics/backends/device_definition.hpp"
 #include "uhaptics/backends/params_location.hpp"
+#include "uhaptics/chai3d/vector_conversions.hpp"
 
 #include <algorithm>
 #include <array>
@@ -12,9 +13,6 @@
 
 namespace chai3d {
 namespace {
-
-uhaptics::Vec3 toEigen(const cVector3d& v) { return uhaptics::Vec3(v(0), v(1), v(2)); }
-cVector3d toChai(const uhaptics::Vec3& v) { return cVector3d(v(0), v(1), v(2)); }
 
 std::int64_t steadyNs() {
   return std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::steady_clock::now().time_since_epoch()).count();

@@ -3,6 +3,7 @@
 #include <cmath>
 #include <string>
 
+#include "uhaptics/chai3d/vector_conversions.hpp"
 #include "uhaptics/core/fault.hpp"
 #include "uhaptics/core/regularized_solve.hpp"
 
@@ -13,8 +14,6 @@ constexpr cExoFingerTool::cPhalanxPoint kFingertip{cExoFingerTool::C_PHALANX_MID
 
 uhaptics::Vec2 unit(double a_angle) { return uhaptics::Vec2(std::cos(a_angle), std::sin(a_angle)); }
 uhaptics::Vec2 unitDerivative(double a_angle) { return uhaptics::Vec2(-std::sin(a_angle), std::cos(a_angle)); }
-cVector3d toChai(const uhaptics::Vec3& a_v) { return cVector3d(a_v(0), a_v(1), a_v(2)); }
-uhaptics::Vec3 toEigen(const cVector3d& a_v) { return uhaptics::Vec3(a_v(0), a_v(1), a_v(2)); }
 
 }  // namespace
 
