@@ -1,6 +1,7 @@
 // The scripted hand: path geometry, spring-damper force, saturation, bad input, no allocation.
 #include <catch2/catch.hpp>
 #include <cmath>
+#include <limits>
 
 #include "uhaptics/backends/scripted_hand.hpp"
 #include "uhaptics/core/fault.hpp"
@@ -52,8 +53,8 @@ TEST_CASE("scripted hand force is a saturated spring-damper toward the anchor", 
   CHECK(g.norm() == Approx(3.0));
   CHECK(g.normalized().dot(Vec3(-0.6, -0.8, 0.0)) == Approx(1.0).margin(1e-6));
   // Non-finite state never produces a force.
-  CHECK(hand.force(0.0, Vec3(NAN, 0, 0), Vec3::Zero()).isZero());
-  CHECK(hand.force(INFINITY, Vec3::Zero(), Vec3::Zero()).isZero());
+  CHECK(hand.force(0.0, Vec3(std::numeric_limits<double>::quiet_NaN(), 0, 0), Vec3::Zero()).isZero());
+  CHECK(hand.force(std::numeric_limits<double>::infinity(), Vec3::Zero(), Vec3::Zero()).isZero());
 }
 
 TEST_CASE("scripted hand evaluation allocates nothing", "[backends][hand]") {

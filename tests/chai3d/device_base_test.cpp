@@ -3,6 +3,7 @@
 #include <catch2/catch.hpp>
 #include <chrono>
 #include <cmath>
+#include <limits>
 #include <cstdio>
 #include <fstream>
 #include <sstream>
@@ -81,9 +82,9 @@ TEST_CASE("non-finite commands are refused with a fault and a zero command", "[c
   PointMassDevice device(selection);
   device.setLockStep(true);
   REQUIRE(device.open());
-  CHECK(device.setForce(cVector3d(NAN, 0.0, 0.0)) == C_ERROR);
+  CHECK(device.setForce(cVector3d(std::numeric_limits<double>::quiet_NaN(), 0.0, 0.0)) == C_ERROR);
   CHECK(device.getLastFault() == uhaptics::Fault::kNonFiniteInput);
-  CHECK(device.setForceAndTorque(cVector3d(0, 0, 0), cVector3d(INFINITY, 0, 0)) == C_ERROR);
+  CHECK(device.setForceAndTorque(cVector3d(0, 0, 0), cVector3d(std::numeric_limits<double>::infinity(), 0, 0)) == C_ERROR);
   REQUIRE(device.setForce(cVector3d(0.0, 0.0, 20.0)));  // beyond the fixture's 10 N: saturated
   CHECK(device.plant().actuator.z() == 10.0);
   CHECK(device.getSessionStats().faults == 2);

@@ -1,5 +1,6 @@
 #include <catch2/catch.hpp>
 #include <cmath>
+#include <limits>
 #include <random>
 
 #include "uhaptics/core/finite_difference.hpp"
@@ -31,7 +32,7 @@ TEST_CASE("joint limits: distance, containment and validation") {
   bad.lower(1) = 0.6;  // lower above upper
   CHECK_FALSE(bad.valid());
   bad = l;
-  bad.map(0, 0) = NAN;
+  bad.map(0, 0) = std::numeric_limits<double>::quiet_NaN();
   CHECK_FALSE(bad.valid());
 }
 

@@ -124,6 +124,6 @@ TEST_CASE("sim: a finger follows a fingertip path, reachable points exactly, oth
     }
   }
   CHECK(reached <= best + 1e-4);
-  CHECK_THROWS_AS(FingerTrajectory::followingPath(test::exoModel(), [](double) { return Vec2(NAN, 0.0); }, 1.0, 1.0, 20.0),
+  CHECK_THROWS_AS(FingerTrajectory::followingPath(test::exoModel(), [](double) { return Vec2(std::numeric_limits<double>::quiet_NaN(), 0.0); }, 1.0, 1.0, 20.0),
                   Error);
 }

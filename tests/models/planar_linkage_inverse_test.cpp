@@ -4,6 +4,7 @@
 #include <Eigen/LU>
 #include <catch2/catch.hpp>
 #include <cmath>
+#include <limits>
 #include <random>
 
 #include "device_models.hpp"
@@ -50,7 +51,7 @@ void checkRoundTrips(const PlanarLinkageModel<N>& model) {
     std::array<Vec<N>, 2> solutions;
     const int count = model.closeLastTwoLinks(x, phi.template head<N - 2>(), solutions);
     REQUIRE(count >= 1);
-    double nearest = INFINITY;
+    double nearest = std::numeric_limits<double>::infinity();
     for (int k = 0; k < count; ++k) {
       const Vec<N>& s = solutions[static_cast<std::size_t>(k)];
       CHECK((forwardOf(model, s) - x).norm() <= 1e-9);
@@ -100,7 +101,7 @@ TEST_CASE("Planar linkage inverse kinematics: unreachable and singular targets f
   // Non-finite target or guess.
   CHECK(model.inverse(Vec2(std::nan(""), 0.0), q) == Fault::kNonFiniteInput);
   Vec4 bad = home;
-  bad(2) = INFINITY;
+  bad(2) = std::numeric_limits<double>::infinity();
   CHECK(model.inverse(base, bad) == Fault::kNonFiniteInput);
   CHECK(model.closeLastTwoLinks(Vec2(std::nan(""), 0.0), Vec2(0.0, 0.0), solutions) == 0);
 

@@ -1,5 +1,6 @@
 #include <catch2/catch.hpp>
 #include <algorithm>
+#include <limits>
 #include <random>
 
 #include "rhi_fixtures.hpp"
@@ -112,7 +113,7 @@ TEST_CASE("bad input gives a fault and a safe command") {
     bad(2) = std::nan("");
     CHECK(c.tick(0.0, bad, Vec<4>::Zero(), Vec2(1, 0), tau) == Fault::kNonFiniteInput);
     CHECK(tau.isZero());
-    CHECK(c.tick(0.0, q, Vec<4>::Constant(INFINITY), Vec2(1, 0), tau) == Fault::kNonFiniteInput);
+    CHECK(c.tick(0.0, q, Vec<4>::Constant(std::numeric_limits<double>::infinity()), Vec2(1, 0), tau) == Fault::kNonFiniteInput);
     CHECK(tau.isZero());
     CHECK(c.tick(0.0, q, Vec<4>::Zero(), Vec2(std::nan(""), 0), tau) == Fault::kNonFiniteInput);
     CHECK(tau.isZero());

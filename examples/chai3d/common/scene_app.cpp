@@ -112,7 +112,7 @@ SceneApp::SceneApp(const std::string& a_title, const SceneOptions& a_options, in
   m_font = chai3d::NEW_CFONT_CALIBRI_20();
   float scale_x = 1.0f, scale_y = 1.0f;
   glfwGetWindowContentScale(m_window, &scale_x, &scale_y);
-  m_viewport = new OwnedViewport(m_camera, scale_x, scale_y);
+  m_viewport = new OwnedViewport(m_camera, static_cast<double>(scale_x), static_cast<double>(scale_y));
 }
 
 SceneApp::~SceneApp() {

@@ -271,7 +271,7 @@ PalpationCase runPalpation(const Rhi4Model& model, FmeEllipsoidMode mode, const 
   const Vec4 limits = model.effortLimits();
 
   // 1. Reconfigure at x0, then push into the wall with the hand: anchor ramps 3 cm along u.
-  pc.limit_distance = INFINITY;
+  pc.limit_distance = std::numeric_limits<double>::infinity();
   ClosedLoop loop = settledLoop(model, options, setup, setup.x0, setup.settle_time,
                                 &pc.limit_distance);
   pc.q_settled = loop.device().position();
@@ -392,7 +392,7 @@ namespace {
 int nearestBound(const JointLimits<4>& limits, const Vec4& q, double& distance) {
   const Vec4 s = limits.map * q;
   int bound = -1;
-  distance = INFINITY;
+  distance = std::numeric_limits<double>::infinity();
   for (int j = 0; j < 4; ++j)
     for (int side = 0; side < 2; ++side) {
       const double d = side == 0 ? s(j) - limits.lower(j) : limits.upper(j) - s(j);
@@ -407,7 +407,7 @@ int nearestBound(const JointLimits<4>& limits, const Vec4& q, double& distance) 
 // Global minimum of the matching cost on the self-motion manifold through x: the best point of a
 // dense grid (2 deg), refined by a descent from it. False when no grid point is valid.
 bool globalMatch(const Rhi4Model& model, const Vec2& x, const Mat2& target, Vec4& q_best, double& cost) {
-  cost = INFINITY;
+  cost = std::numeric_limits<double>::infinity();
   forEachSelfMotionGridPoint(model, x, 180, [&](int, int, int, const Vec4& q) {
     const double c = matchingCost(model, q, target);
     if (c < cost) {
@@ -533,7 +533,7 @@ TransitionRun runTransition(const Rhi4Model& model, bool smooth, const Palpation
   const double t0 = loop.time();
   Vec4 previous = Vec4::Zero(), previous_applied = Vec4::Zero(), previous_limit = Vec4::Zero();
   bool first = true;
-  run.limit_distance = INFINITY;
+  run.limit_distance = std::numeric_limits<double>::infinity();
   while (loop.time() < t0 + 7.5) {
     const double t = loop.time() - t0;
     double depth = 0.0;

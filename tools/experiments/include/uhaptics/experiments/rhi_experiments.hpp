@@ -4,6 +4,7 @@
 // uhaptics-rhi-experiments writes the CSV/PNG, tests/rhi checks the numbers.
 #include <array>
 #include <cstddef>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -187,7 +188,7 @@ HomeScales homeScales(const Rhi4Model& model);
 struct WorkspaceSummary {
   std::size_t valid = 0, above = 0, pinned = 0, weaker = 0, unexplained = 0;
   std::size_t rematched = 0, lifted = 0;  // rematched from the dense scan; of them, now above 1
-  double min_ratio = INFINITY, max_ratio = 0.0;
+  double min_ratio = std::numeric_limits<double>::infinity(), max_ratio = 0.0;
 };
 WorkspaceSummary summarize(const std::vector<WorkspacePoint>& map);
 
