@@ -17,7 +17,7 @@
 //
 //   W_user = sum_k tau_user,k (q_j,k+1 - q_j,k),     E_generated = -W_user at the end of the run,
 //
-// and with the device at rest at the end (its user's grip brings it back) the device and wall
+// and with the device at rest at the end (the hand's damper stills it) the device and wall
 // together are passive over the run exactly when E_generated <= 0. A sampled spring makes
 // E_generated = (K T / 2 - b) * integral(qd_j^2) to leading order (b: the damping the joint's
 // motion meets), so the boundary the classifier finds is Colgate and Brown's K = 2 b / T whatever
@@ -34,7 +34,8 @@
 // (the registered TAU and planar linkages hold the end effector with a spring-damper hand), that
 // grip's damping reflected to the joint. identifyJoint() measures it on the plant, without any wall,
 // from the energy a sinusoidal torque on joint j puts in per cycle (W = b int qd^2 + f_c int |qd| at
-// two amplitudes). The analytic bounds computed beside each boundary:
+// two amplitudes), at the frequency where the contact mode rings (the damping a joint of a
+// multi-joint mechanism meets depends on it). The analytic bounds computed beside each boundary:
 //   Colgate and Brown:   K < 2 (b - |B|) / T, and with a command delay of d periods the same
 //                        energy argument with a lag of T/2 + d T: K < 2 (b - |B|) / ((1 + 2 d) T)
 //                        (first order in the delay, not in the paper)
