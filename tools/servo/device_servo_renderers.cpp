@@ -66,4 +66,13 @@ std::unique_ptr<DeviceServoRenderer> makeDeviceRenderer(const DeviceDefinition& 
   throw Error("makeDeviceRenderer: device '" + device.name + "' is not registered");
 }
 
+std::unique_ptr<DevicePolicy> makeDevicePolicy(const DeviceDefinition& device, const std::string& params_dir) {
+  const std::string path = params_dir + "/" + device.params_file;
+#define UHAPTICS_MAKE_POLICY(id, registered_name) \
+  if (device.name == registered_name) return devices::id::makeServoPolicy(path);
+  UHAPTICS_FOR_EACH_DEVICE(UHAPTICS_MAKE_POLICY)
+#undef UHAPTICS_MAKE_POLICY
+  throw Error("makeDevicePolicy: device '" + device.name + "' is not registered");
+}
+
 }  // namespace uhaptics

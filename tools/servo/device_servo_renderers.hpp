@@ -65,5 +65,8 @@ inline Vec3 planarPalpationScene(const SensedState&, double time) {
 /// The device's policy and scene on the model in <params_dir>/<its parameter file>; throws Error for
 /// a malformed file.
 std::unique_ptr<DeviceServoRenderer> makeDeviceRenderer(const DeviceDefinition& device, const std::string& params_dir);
+/// The device's policy alone (as makeDeviceRenderer makes it, without the scene), for callers that
+/// run it under their own loop (the Z-width harness: the policy in free space); throws as above.
+std::unique_ptr<DevicePolicy> makeDevicePolicy(const DeviceDefinition& device, const std::string& params_dir);
 
 }  // namespace uhaptics

@@ -1,0 +1,79 @@
+#include "zwidth_devices.hpp"
+
+#include <cmath>
+#include <limits>
+#include <memory>
+
+#include "device_servo_renderers.hpp"
+#include "uhaptics/backends/board_catalog.hpp"
+#include "uhaptics/core/fault.hpp"
+#include "uhaptics/models/param_file.hpp"
+
+namespace uhaptics {
+
+namespace {
+
+// The device's policy with no scene force: what it commands in free space.
+class PolicyFreeSpace final : public experiments::FreeSpaceControl {
+ public:
+  PolicyFreeSpace(std::unique_ptr<DevicePolicy> policy, int actuators)
+      : policy_(std::move(policy)), actuators_(actuators) {}
+  void reset(int command_delay) override {
+    policy_->reset(command_delay);
+    ticks_ = 0;
+  }
+  bool efforts(const double* positions, const double* rates, bool first, double period, double* out) noexcept override {
+    policy_->sense(SensedJoints{positions, rates, first}, state_);
+    SceneInput input;
+    input.dt = period;
+    input.time = static_cast<double>(ticks_++) * period;
+    input.seen_position = state_.position;
+    if (policy_->render(input, out) != Fault::kNone) return false;
+    for (int a = 0; a < actuators_; ++a)
+      if (!std::isfinite(out[a])) return false;
+    return true;
+  }
+
+ private:
+  std::unique_ptr<DevicePolicy> policy_;
+  int actuators_;
+  SensedState state_;
+  long ticks_ = 0;
+};
+
+// The joint's entry of a per-joint friction array in the parameter file; NaN when it has none.
+double jointFriction(const ParamFile& file, const char* key, int joints, int joint) {
+  if (!file.has(key)) return std::numeric_limits<double>::quiet_NaN();
+  return file.numbers(key, static_cast<std::size_t>(joints), 0.0, std::numeric_limits<double>::max())[static_cast<std::size_t>(joint)];
+}
+
+}  // namespace
+
+experiments::ZWidthDevice zwidthDevice(const DeviceDefinition& device, const std::string& params_dir, int joint) {
+  experiments::ZWidthDevice d;
+  d.name = device.name;
+  d.spec = boardSpec(device, params_dir);
+  const int actuators = d.spec.descriptor.actuators;
+  if (joint < 0 || joint >= actuators)
+    throw Error("Z-width: " + device.name + " actuates joints 0.." + std::to_string(actuators - 1) + ", not " +
+                std::to_string(joint));
+  d.joint = joint;
+  const std::string path = params_dir + "/" + device.params_file;
+  d.make_plant = [make = device.make_plant, path] { return make(path); };
+  const DeviceDefinition* definition = &device;  // registrations live for the program
+  d.make_free_space = [definition, params_dir, actuators]() -> std::unique_ptr<experiments::FreeSpaceControl> {
+    return std::make_unique<PolicyFreeSpace>(makeDevicePolicy(*definition, params_dir), actuators);
+  };
+  const ParamFile file = ParamFile::load(path);
+  d.param_viscous = jointFriction(file, "friction/viscous", d.spec.descriptor.joints, joint);
+  d.param_coulomb = jointFriction(file, "friction/coulomb", d.spec.descriptor.joints, joint);
+  return d;
+}
+
+std::vector<experiments::ZWidthDevice> registeredZWidthDevices(const std::string& params_dir, int joint) {
+  std::vector<experiments::ZWidthDevice> devices;
+  for (const DeviceDefinition* device : deviceDefinitions()) devices.push_back(zwidthDevice(*device, params_dir, joint));
+  return devices;
+}
+
+}  // namespace uhaptics

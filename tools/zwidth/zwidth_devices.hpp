@@ -1,0 +1,21 @@
+#pragma once
+// The registered devices (device_definition.hpp) as the Z-width harness drives them: each device's
+// simulated plant, its board spec (sensor resolution, effort limits), its rendering policy in free
+// space under the wall (the TAU's gravity compensation, the planar linkages' null-space control),
+// and the wall joint's friction as its parameter file states it.
+#include <string>
+#include <vector>
+
+#include "uhaptics/backends/device_definition.hpp"
+#include "uhaptics/experiments/zwidth.hpp"
+
+namespace uhaptics {
+
+/// The device with its parameter file in params_dir, the wall on actuated joint `joint`. Throws Error
+/// for a malformed file or a joint the device does not actuate.
+experiments::ZWidthDevice zwidthDevice(const DeviceDefinition& device, const std::string& params_dir, int joint = 0);
+
+/// Every registered device, in registration order, the wall on joint `joint` of each.
+std::vector<experiments::ZWidthDevice> registeredZWidthDevices(const std::string& params_dir, int joint = 0);
+
+}  // namespace uhaptics
