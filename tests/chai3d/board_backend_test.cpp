@@ -34,6 +34,7 @@ struct Run {
   cVector3d start, end;  // device position [m] before and after
   double largest_output = 0.0;
   std::uint64_t faults = 0;
+  std::uint64_t stale_input_ticks = 0;  // servo ticks whose application input was stale
   uhaptics::ServoCounters counters;
 };
 
@@ -54,6 +55,7 @@ Run holdForce(const cUhapticsDevicePtr& device, const cVector3d& force, double s
   const uhaptics::SessionStatsSnapshot stats = device->getSessionStats();
   run.largest_output = stats.peak_output;
   run.faults = stats.faults;
+  run.stale_input_ticks = stats.stale_input_ticks;
   device->getServoLoop()->stop();  // counters are final
   run.counters = device->getServoLoop()->counters();
   REQUIRE(device->close());
@@ -79,7 +81,8 @@ TEST_CASE("board backend: TAU on the emulated board moves by F / k_h against pap
   const cVector3d d = run.end - run.start;
   const double along = d.y(), across = std::hypot(d.x(), d.z());
   std::cout << "tau, emulated board, 0.5 N for 3 s: " << run.counters.ticks << " servo ticks, " << 1e3 * along
-            << " mm along the force, " << 1e3 * across << " mm across (F/k_h = 12.5 mm)\n";
+            << " mm along the force, " << 1e3 * across << " mm across (F/k_h = 12.5 mm), "
+            << run.stale_input_ticks << " ticks with stale input\n";
   checkLink(run);
   // F / k_h once the hand's damped oscillation (b_h = 3.6 N s/m) has settled; 20 % covers what is left of
   // it after 3 s on a loaded machine and the encoders' quantization.
