@@ -9,11 +9,13 @@
 #include <limits>
 #include <memory>
 #include <random>
+#include <string>
 #include <vector>
 
 #include "chai3d.h"
 #include "point_mass_device.hpp"
 #include "uhaptics/chai3d/CPassiveHapticDevice.hpp"
+#include "uhaptics/chai3d/device_registry.hpp"
 #include "uhaptics/tools/alloc_probe.hpp"
 
 using namespace chai3d;
@@ -411,4 +413,50 @@ TEST_CASE("device option passivity: the servo-path layer takes out what an activ
   CHECK(passive.figure("passivity_dissipated_mJ")->value > 0.0);
   CHECK(passive.figure("passivity_faults")->value == 0.0);
   CHECK(passive.faults == 0);
+
+  // A tolerated energy: the layer lets the first 10 J go (0.3 s of it stays far below).
+  auto selection = pointMassSelection(1.0);
+  selection.options["passivity_energy_threshold"] = 10.0;
+  PointMassDevice tolerant(selection);
+  CHECK(tolerant.getPassivityEnergyThreshold() == 10.0);
+  tolerant.setLockStep(true);
+  REQUIRE(tolerant.open());
+  for (int k = 0; k < 300; ++k) {
+    cVector3d v;
+    tolerant.getLinearVelocity(v);
+    tolerant.setForce(k < 20 ? cVector3d(0.5, 0.0, 0.0) : cVector3d(4.0 * v(0), 0.0, 0.0));
+  }
+  const auto tolerated = tolerant.getSessionStats();
+  CHECK(tolerated.figure("passivity_active_ticks")->value == 0.0);
+  CHECK(tolerated.figure("passivity_peak_energy_out_mJ")->value > 1.0);
+}
+
+TEST_CASE("device option passivity: every registered device runs with the layer on", "[chai3d][passivity]") {
+  for (const std::string& name : uhaptics::adapter::deviceNames()) {
+    INFO("device " << name);
+    uhaptics::DeviceSelection selection;
+    selection.device = name;
+    selection.options["passivity"] = 1.0;
+    const cUhapticsDevicePtr device = uhaptics::adapter::createDevice(selection);
+    device->setLockStep(true);
+    REQUIRE(device->open());
+    const std::vector<double> caps = device->getPassivityDampingCaps();
+    CHECK(static_cast<int>(caps.size()) >= 1);
+    std::string listed;
+    for (const double cap : caps) {
+      CHECK(std::isfinite(cap));
+      CHECK(cap >= 0.0);
+      listed += " " + std::to_string(cap);
+    }
+    // The scripted hand moves the device along its path for 2 s; the application sends no force.
+    for (int k = 0; k < 2000; ++k) REQUIRE(device->setForce(cVector3d(0.0, 0.0, 0.0)));
+    const auto stats = device->getSessionStats();
+    WARN(name << ": caps" << listed << ", guard " << device->getPassivityMinRate() << ", peak energy out "
+              << stats.figure("passivity_peak_energy_out_mJ")->value << " mJ, active ticks "
+              << stats.figure("passivity_active_ticks")->value);
+    CHECK(stats.faults == 0);
+    CHECK(stats.figure("passivity_faults")->value == 0.0);
+    CHECK(device->getRendererName().find(" + passivity") != std::string::npos);
+    CHECK(device->close());
+  }
 }

@@ -42,6 +42,7 @@ cUhapticsDevice::cUhapticsDevice(unsigned int a_deviceNumber, const uhaptics::De
       m_passivityMode(static_cast<int>(a_selection.option("passivity", 0.0, 0.0, 2.0))),
       m_passivityMaxDamping(a_selection.option("passivity_max_damping", std::nan(""), 0.0, 1e4)),
       m_passivityMinRate(a_selection.option("passivity_min_rate", std::nan(""), 0.0, 1e3)),
+      m_passivityEnergyThreshold(a_selection.option("passivity_energy_threshold", 0.0, 0.0, 10.0)),
       m_servoPeriod(a_servoPeriod),
       m_servoThreadRenders(a_selection.backend != "sim"),
       m_staleTime(a_selection.option("stale_time", 0.01, 0.001, 1.0)),
@@ -147,6 +148,7 @@ void cUhapticsDevice::configurePassivityLocked() {
   options.actuators = m_actuators;
   auto& controller = options.controller;
   controller.enabled = m_passivityMode == 1;
+  controller.energy_threshold = m_passivityEnergyThreshold;
   controller.effort_limit.resize(m_actuators);
   double resolvedRate = 0.0;
   for (int i = 0; i < m_actuators; ++i) {

@@ -193,6 +193,12 @@ class cUhapticsDevice : public cGenericHapticDevice {
   /// longest window (the slowest rate it resolves), the largest over the actuated joints, else
   /// 1e-3 for ideal sensors. 0 while the layer is off or before open().
   double getPassivityMinRate();
+  /// Net generated energy the passivity layer tolerates before it damps [J] (option
+  /// "passivity_energy_threshold", 0..10, default 0). A policy whose efforts include a conservative
+  /// field of its own (the TAU's gravity compensation, the planar devices' null-space potential)
+  /// gives out energy as the user moves it, which the layer counts like any other; a threshold above
+  /// that field's energy range leaves it alone, at the price of tolerating as much from the scene.
+  double getPassivityEnergyThreshold() const { return m_passivityEnergyThreshold; }
 
  protected:
   /// a_servoPeriod [s]: the device's control period (its board's rate). a_joints, a_actuators: what
@@ -287,6 +293,7 @@ class cUhapticsDevice : public cGenericHapticDevice {
   const int m_passivityMode;                           // option "passivity"
   const double m_passivityMaxDamping;                  // option "passivity_max_damping", NaN: from the spec
   const double m_passivityMinRate;                     // option "passivity_min_rate", NaN: from the sensors
+  const double m_passivityEnergyThreshold;             // option "passivity_energy_threshold" [J]
   std::array<double, C_MAX_DOF> m_restJoints{};        // setPolicy()
   State m_state;       // the policy's latest sense()
   const double m_servoPeriod;
