@@ -168,7 +168,9 @@ bool cPassiveHapticDevice::getUserSwitches(unsigned int& a_userSwitches) {
   return m_device->getUserSwitches(a_userSwitches);
 }
 
-void cPassiveHapticDevice::setEnableGripperUserSwitch(const bool a_status) { m_device->setEnableGripperUserSwitch(a_status); }
+void cPassiveHapticDevice::setEnableGripperUserSwitch(const bool a_status) {
+  m_device->setEnableGripperUserSwitch(a_status);
+}
 
 bool cPassiveHapticDevice::getEnableGripperUserSwitch() const { return m_device->getEnableGripperUserSwitch(); }
 
@@ -203,7 +205,8 @@ bool cPassiveHapticDevice::setForceAndTorqueAndGripperForce(const cVector3d& a_f
   uhaptics::Vec3 velocity = uhaptics::Vec3::Zero();
   if (m_commanded) {
     const uhaptics::Vec3 moved = position - m_lastPosition;
-    const bool given = m_device->getLinearVelocity(reported) && !(reported.equals(cVector3d(0, 0, 0)) && !moved.isZero());
+    const bool given =
+        m_device->getLinearVelocity(reported) && !(reported.equals(cVector3d(0, 0, 0)) && !moved.isZero());
     velocity = given ? toEigen(reported) : uhaptics::Vec3(moved / period);
   }
   m_lastPosition = position;

@@ -59,7 +59,8 @@ class cPassiveHapticDevice : public cGenericHapticDevice {
   //! Period assumed for a first command, before one can be measured [s] (CHAI3D's 1 kHz).
   static constexpr double C_NOMINAL_PERIOD = 1e-3;
 
-  //! Constructor of cPassiveHapticDevice: wraps a_device (not null: throws uhaptics::Error), copies its specification; passivity on.
+  //! Constructor of cPassiveHapticDevice: wraps a_device (null: throws uhaptics::Error); passivity on.
+  //! The specification is the wrapped device's (copied now and when it opens).
   explicit cPassiveHapticDevice(cGenericHapticDevicePtr a_device);
   //! Destructor of cPassiveHapticDevice (the wrapped device is left as it is).
   virtual ~cPassiveHapticDevice() {}
@@ -105,8 +106,9 @@ class cPassiveHapticDevice : public cGenericHapticDevice {
   virtual void setEnableGripperUserSwitch(const bool a_status);
   //! Status of the wrapped device's virtual gripper switch.
   virtual bool getEnableGripperUserSwitch() const;
-  //! Runs the passivity controller on the force [N] and torque [N m], then sends them and the gripper force [N] to the wrapped device.
-  virtual bool setForceAndTorqueAndGripperForce(const cVector3d& a_force, const cVector3d& a_torque, double a_gripperForce);
+  //! Passivity controller on the force [N] and torque [N m], then both and the gripper force [N] to the wrapped device.
+  virtual bool setForceAndTorqueAndGripperForce(const cVector3d& a_force, const cVector3d& a_torque,
+                                                double a_gripperForce);
   //! Enables or disables the wrapped device's forces.
   virtual bool enableForces(bool a_value);
 
@@ -117,11 +119,12 @@ class cPassiveHapticDevice : public cGenericHapticDevice {
   void setPassivityEnabled(bool a_enabled);
   //! Whether the controller adds damping.
   bool getPassivityEnabled() const { return m_linear.enabled(); }
-  //! Damping caps [N s/m], [N m s/rad], finite and >= 0 (else uhaptics::Error); replaces the specification's from now on. Set-up: starts a new observation.
+  //! Damping caps [N s/m], [N m s/rad], finite and >= 0 (else uhaptics::Error), instead of the specification's.
+  //! Set-up: starts a new observation.
   void setMaxDamping(double a_linearDamping, double a_angularDamping);
   //! Velocity guards [m/s], [rad/s], finite and >= 0 (else uhaptics::Error). Set-up: starts a new observation.
   void setVelocityGuard(double a_linearRate, double a_angularRate);
-  //! Fixed period between commands [s], > 0; 0 (default) measures it on the steady clock. Finite and >= 0, else uhaptics::Error.
+  //! Fixed period between commands [s]; 0 (default): measured on the steady clock. Negative or NaN: uhaptics::Error.
   void setServoPeriod(double a_period);
   //! Forgets the observed energy and counters; the next command starts a new observation.
   void resetObservation();

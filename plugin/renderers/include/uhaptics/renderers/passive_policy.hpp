@@ -10,7 +10,7 @@
 //                   same reading are kept for the controller
 //   render(input)   the wrapped policy's efforts u; the controller closes the last period with the
 //                   work of the command actually applied, and where the device has given out more
-//                   than it took in it adds -alpha qd (alpha capped per joint, nothing below the
+//                   than it has taken in it adds -alpha qd (alpha capped per joint, nothing below the
 //                   velocity guard); the command is held to the effort limits and finite
 //
 // Joint space, so that every device is covered: an underactuated device's sensed-only joints carry
