@@ -86,9 +86,30 @@ TEST_CASE("renderer figures count and keep maxima, reset on start, and reach the
   CHECK(s.figure("engagements")->value == 0.0);
 
   SessionStats full;
-  static const char* const names[] = {"a", "b", "c", "d", "e", "f", "g", "h", "i", "j", "k", "l"};
-  for (const char* name : names) full.declareFigure(name, Kind::kCount);
-  CHECK_THROWS_AS(full.declareFigure("m", Kind::kCount), uhaptics::Error);
+  static const char* const names[] = {"a", "b", "c", "d", "e", "f", "g", "h", "i", "j", "k", "l", "m",
+                                      "n", "o", "p", "q", "r", "s", "t", "u", "v", "w", "x", "y", "z"};
+  static_assert(uhaptics::SessionStatsSnapshot::kMaxFigures < 26, "enough names for a full recorder");
+  for (int i = 0; i < uhaptics::SessionStatsSnapshot::kMaxFigures; ++i) full.declareFigure(names[i], Kind::kCount);
+  CHECK_THROWS_AS(full.declareFigure(names[uhaptics::SessionStatsSnapshot::kMaxFigures], Kind::kCount),
+                  uhaptics::Error);
+}
+
+TEST_CASE("a value figure keeps its latest finite reading, also when it falls", "[chai3d][stats]") {
+  using Kind = uhaptics::RendererFigure::Kind;
+  SessionStats stats;
+  const int energy = stats.declareFigure("energy_out_mJ", Kind::kValue);
+  stats.start(0.0);
+  {
+    uhaptics::tools::AllocationScope scope;
+    stats.setValue(energy, 2.5);
+    stats.setValue(energy, -0.75);
+    stats.setValue(energy, std::nan(""));
+    stats.setValue(99, 1.0);  // unknown ids are ignored
+    CHECK(scope.count() == 0);
+  }
+  const auto s = stats.snapshot(1.0);
+  CHECK(s.figure("energy_out_mJ")->value == -0.75);
+  CHECK_THAT(uhaptics::formatStatsJson(s, "tau", "sim", "spring"), Catch::Contains("\"energy_out_mJ\": -0.75"));
 }
 
 TEST_CASE("session stats keep the box of visited positions", "[chai3d][stats]") {

@@ -360,3 +360,60 @@ TEST_CASE("passivity controller: a servo tick allocates nothing") {
   CHECK(pc.activeTicks() > 0);
   CHECK(dynamic.activeTicks() > 0);
 }
+
+TEST_CASE("passivity controller: effort limits hold the command and the observer counts the held one") {
+  const double T = 1e-3, limit = 1.5, qd = 0.5;
+  PassivityControllerOptions<1> o = withCap(1e3);
+  o.effort_limit = V1(limit);
+  PassivityController<1> pc(o);
+  V1 out;
+  // The renderer's effort above the limit is held to it, and its work is the held effort's.
+  REQUIRE(pc.update(V1(0.0), V1(0.0), V1(4.0), T, out) == Fault::kNone);
+  CHECK(out(0) == limit);
+  REQUIRE(pc.update(V1(0.01), V1(qd), V1(1.4), T, out) == Fault::kNone);
+  CHECK(pc.energyOut() == Approx(limit * 0.01).epsilon(1e-12));
+  // The damping wanted here (15 mJ in one period at 0.5 rad/s) would take the command far below
+  // -limit: the device gets -limit, and only the damping that survived the hold dissipates.
+  CHECK(pc.lastDamping()(0) > 0.0);
+  CHECK(out(0) == -limit);
+  const double applied_brake = 1.4 + limit;
+  REQUIRE(pc.update(V1(0.01 + qd * T), V1(qd), V1(1.4), T, out) == Fault::kNone);
+  CHECK(pc.dissipated() == Approx(applied_brake * qd * T).epsilon(1e-12));
+  CHECK(pc.energyOut() == Approx(limit * 0.01 - limit * qd * T).epsilon(1e-12));
+  CHECK(std::abs(out(0)) <= limit);
+
+  // Disabled, the command passes through unchanged, limits included.
+  o.enabled = false;
+  PassivityController<1> off(o);
+  REQUIRE(off.update(V1(0.0), V1(0.0), V1(4.0), T, out) == Fault::kNone);
+  CHECK(out(0) == 4.0);
+
+  // Limits of the wrong size or not positive are refused.
+  PassivityControllerOptions<2> o2 = withCap<2>(1.0);
+  o2.effort_limit = V1(1.0);
+  CHECK_THROWS_AS(PassivityController<2>(o2), uhaptics::Error);
+  o2.effort_limit = Eigen::Vector2d(1.0, 0.0);
+  CHECK_THROWS_AS(PassivityController<2>(o2), uhaptics::Error);
+  o2.effort_limit = Eigen::Vector2d(1.0, std::nan(""));
+  CHECK_THROWS_AS(PassivityController<2>(o2), uhaptics::Error);
+  o2.effort_limit = Eigen::Vector2d(1.0, std::numeric_limits<double>::infinity());
+  CHECK_NOTHROW(PassivityController<2>(o2));
+}
+
+TEST_CASE("passivity controller: an interrupted chain does not count the work across the gap") {
+  const double T = 1e-3;
+  PassivityController<1> pc(withCap(0.0));  // observe only
+  V1 out;
+  pc.update(V1(0.0), V1(0.0), V1(2.0), T, out);
+  pc.update(V1(0.01), V1(0.0), V1(2.0), T, out);
+  const double before = pc.energyOut();
+  CHECK(before == Approx(0.02).epsilon(1e-12));
+  // Another stage commanded the gap: the joint moves a lot, none of it is this command's work.
+  pc.interrupt();
+  pc.update(V1(0.5), V1(0.0), V1(1.0), T, out);
+  CHECK(pc.energyOut() == before);
+  CHECK(pc.peakEnergyOut() == Approx(0.02).epsilon(1e-12));
+  pc.update(V1(0.51), V1(0.0), V1(0.0), T, out);
+  CHECK(pc.energyOut() == Approx(before + 0.01).epsilon(1e-12));
+  CHECK(pc.faults() == 0);
+}

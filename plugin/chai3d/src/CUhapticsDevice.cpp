@@ -10,6 +10,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <limits>
 
 namespace chai3d {
 namespace {
@@ -38,6 +39,10 @@ cUhapticsDevice::cUhapticsDevice(unsigned int a_deviceNumber, const uhaptics::De
                                  double a_servoPeriod, int a_joints, int a_actuators)
     : cGenericHapticDevice(a_deviceNumber),
       m_selection(a_selection),
+      m_passivityMode(static_cast<int>(a_selection.option("passivity", 0.0, 0.0, 2.0))),
+      m_passivityMaxDamping(a_selection.option("passivity_max_damping", std::nan(""), 0.0, 1e4)),
+      m_passivityMinRate(a_selection.option("passivity_min_rate", std::nan(""), 0.0, 1e3)),
+      m_passivityEnergyThreshold(a_selection.option("passivity_energy_threshold", 0.0, 0.0, 10.0)),
       m_servoPeriod(a_servoPeriod),
       m_servoThreadRenders(a_selection.backend != "sim"),
       m_staleTime(a_selection.option("stale_time", 0.01, 0.001, 1.0)),
@@ -95,8 +100,88 @@ void cUhapticsDevice::setPolicy(std::unique_ptr<uhaptics::DevicePolicy> a_policy
   static_assert(uhaptics::kMaxSensedJoints == C_MAX_DOF, "a policy reports as many joints as CHAI3D takes");
   if (!a_policy) throw uhaptics::Error("device '" + m_selection.device + "': no rendering policy");
   m_policy = std::move(a_policy);
+  if (m_passivityMode != 0) {
+    // Set up for real in open(), from the board it opens; until then it observes only.
+    uhaptics::PassivePolicy::Options options;
+    options.actuators = m_actuators;
+    options.controller.enabled = false;
+    auto passive = std::make_unique<uhaptics::PassivePolicy>(std::move(m_policy), options, m_stats);
+    m_passive = passive.get();
+    m_policy = std::move(passive);
+  }
+  std::copy(a_restJoints, a_restJoints + m_joints, m_restJoints.begin());
   const std::array<double, C_MAX_DOF> rates{};
   m_policy->sense(uhaptics::SensedJoints{a_restJoints, rates.data(), true}, m_state);  // at rest until opened
+}
+
+std::vector<double> cUhapticsDevice::specificationDampingCapsLocked() {
+  const auto stated = [](double b) { return std::isfinite(b) && b > 0.0 ? b : 0.0; };
+  const double linear = stated(m_specifications.m_maxLinearDamping);
+  const double angular = m_specifications.m_sensedRotation ? stated(m_specifications.m_maxAngularDamping) : 0.0;
+  // Central differences of the policy's kinematics around the rest joints; the step is far above
+  // the forward kinematics' tolerance and far below the joints' ranges.
+  constexpr double kStep = 1e-5;  // [rad or m]
+  std::array<double, C_MAX_DOF> joints = m_restJoints;
+  const std::array<double, C_MAX_DOF> rates{};
+  State plus, minus;
+  std::vector<double> caps(static_cast<std::size_t>(m_actuators), 0.0);
+  for (int i = 0; i < m_actuators; ++i) {
+    joints[i] = m_restJoints[i] + kStep;
+    m_policy->sense(uhaptics::SensedJoints{joints.data(), rates.data(), true}, plus);
+    joints[i] = m_restJoints[i] - kStep;
+    m_policy->sense(uhaptics::SensedJoints{joints.data(), rates.data(), true}, minus);
+    joints[i] = m_restJoints[i];
+    const uhaptics::Vec3 linearRate = (plus.position - minus.position) / (2.0 * kStep);
+    const uhaptics::Mat3 turn = plus.rotation * minus.rotation.transpose();  // small: its skew part is the angle
+    const uhaptics::Vec3 angularRate =
+        0.5 * uhaptics::Vec3(turn(2, 1) - turn(1, 2), turn(0, 2) - turn(2, 0), turn(1, 0) - turn(0, 1)) / (2.0 * kStep);
+    const double cap = linear * linearRate.squaredNorm() + angular * angularRate.squaredNorm();
+    caps[static_cast<std::size_t>(i)] = std::isfinite(cap) ? cap : 0.0;
+  }
+  m_policy->sense(uhaptics::SensedJoints{m_restJoints.data(), rates.data(), true}, m_state);
+  return caps;
+}
+
+void cUhapticsDevice::configurePassivityLocked() {
+  const uhaptics::BoardSpec& spec = m_io->spec();
+  uhaptics::PassivePolicy::Options options;
+  options.actuators = m_actuators;
+  auto& controller = options.controller;
+  controller.enabled = m_passivityMode == 1;
+  controller.energy_threshold = m_passivityEnergyThreshold;
+  controller.effort_limit.resize(m_actuators);
+  double resolvedRate = 0.0;
+  for (int i = 0; i < m_actuators; ++i) {
+    const double limit = spec.descriptor.effort_limit[static_cast<std::size_t>(i)];
+    controller.effort_limit(i) = limit > 0.0 ? limit : std::numeric_limits<double>::infinity();
+    // The slowest rate the estimator resolves: one sensor step over its longest window.
+    if (spec.sample_rate_hz > 0.0) {
+      resolvedRate = std::max(resolvedRate, spec.position_resolution[static_cast<std::size_t>(i)] * spec.sample_rate_hz /
+                                                uhaptics::JointRateEstimator::kMaxWindow);
+    }
+  }
+  constexpr double kIdealSensorGuard = 1e-3;  // [rad/s or m/s] PassivityControllerOptions' default
+  controller.min_rate = !std::isnan(m_passivityMinRate) ? m_passivityMinRate
+                        : resolvedRate > 0.0           ? resolvedRate
+                                                       : kIdealSensorGuard;
+  const std::vector<double> caps = std::isnan(m_passivityMaxDamping)
+                                       ? specificationDampingCapsLocked()
+                                       : std::vector<double>(static_cast<std::size_t>(m_actuators), m_passivityMaxDamping);
+  controller.max_damping_per_joint = Eigen::Map<const Eigen::VectorXd>(caps.data(), m_actuators);
+  m_passive->configure(options);
+}
+
+std::vector<double> cUhapticsDevice::getPassivityDampingCaps() {
+  std::lock_guard<std::mutex> lock(m_mutex);
+  if (m_passive == nullptr || m_passivityMode == 0) return {};
+  const auto& caps = m_passive->options().controller.max_damping_per_joint;
+  return std::vector<double>(caps.data(), caps.data() + caps.size());
+}
+
+double cUhapticsDevice::getPassivityMinRate() {
+  std::lock_guard<std::mutex> lock(m_mutex);
+  if (m_passive == nullptr || m_passive->options().controller.max_damping_per_joint.size() == 0) return 0.0;
+  return m_passive->options().controller.min_rate;
 }
 
 std::string cUhapticsDevice::paramsDirectory() {
@@ -206,6 +291,7 @@ bool cUhapticsDevice::open() {
                             std::to_string(d.actuators) + " actuators; device '" + m_selection.device + "' needs " +
                             std::to_string(m_joints) + " and " + std::to_string(m_actuators));
     }
+    if (m_passive != nullptr) configurePassivityLocked();
     // Over the board protocol a command acts a period after its reading: the policy is designed for it.
     m_policy->reset(m_io->commandDelayPeriods());
     m_ticks = 0;

@@ -93,6 +93,11 @@ void SessionStats::observeMaximum(int id, double v) noexcept {
   if (v > value.load(std::memory_order_relaxed)) value.store(v, std::memory_order_relaxed);
 }
 
+void SessionStats::setValue(int id, double v) noexcept {
+  if (id < 0 || id >= figure_count_ || !std::isfinite(v)) return;
+  figure_values_[static_cast<std::size_t>(id)].store(v, std::memory_order_relaxed);
+}
+
 const RendererFigure* SessionStatsSnapshot::figure(const std::string& name) const noexcept {
   for (int i = 0; i < figure_count; ++i) {
     if (name == figures[static_cast<std::size_t>(i)].name) return &figures[static_cast<std::size_t>(i)];

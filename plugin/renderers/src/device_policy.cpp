@@ -8,6 +8,7 @@ class NoFigures final : public FigureRecorder {
   int declareFigure(const char*, FigureKind) override { return 0; }  // never read back
   void count(int, std::uint64_t) noexcept override {}
   void observeMaximum(int, double) noexcept override {}
+  void setValue(int, double) noexcept override {}
 };
 
 }  // namespace

@@ -41,6 +41,15 @@
 // Statistics (session_stats.hpp): recorded by whichever thread ticks, optionally written to a file
 // every half second and on close, so even a killed process leaves a recent record.
 //
+// Passivity layer (option "passivity", default 0: off): 1 wraps the device's policy in
+// uhaptics::PassivePolicy (passive_policy.hpp), the time-domain passivity observer and controller
+// on the actuated joints, in the same servo tick; 2 observes only (the energy figures, no
+// damping). Off, the policy runs unwrapped and the tick does none of its work. Read here for every
+// device; open() sets it up from the board it opened: the effort limits of its descriptor, the
+// velocity guard from its sensors' resolution, and the damping cap (option
+// "passivity_max_damping", else the specification's m_maxLinearDamping and m_maxAngularDamping
+// seen at each actuated joint: see getPassivityDampingCaps()).
+//
 // Subclasses supply only what is CHAI3D's or the simulation's: their specification and their policy
 // (in the constructor, setPolicy()), their simulated plant, and accessors for their policy's state.
 // The policy runs with the device mutex (deviceMutex()) held, in the thread that ticks; subclass
@@ -54,6 +63,7 @@
 #include <mutex>
 #include <string>
 #include <thread>
+#include <vector>
 
 #include "system/CGlobals.h"  // must precede device headers (CHAI3D's feature switches)
 #include "devices/CGenericHapticDevice.h"
@@ -67,6 +77,7 @@
 #include "uhaptics/core/fault.hpp"
 #include "uhaptics/core/types.hpp"
 #include "uhaptics/renderers/device_policy.hpp"
+#include "uhaptics/renderers/passive_policy.hpp"
 
 namespace chai3d {
 
@@ -167,6 +178,27 @@ class cUhapticsDevice : public cGenericHapticDevice {
   /// default 1). CHAI3D's haptic loop then runs at the device's rate instead of spinning a core at
   /// SCHED_FIFO, which the kernel's real-time throttling would suspend for 50 ms of every second.
   bool getPaced() const { return m_paced; }
+  /// The passivity layer: 0 off (default), 1 on (observer and damping), 2 observe only (option
+  /// "passivity"; see the header comment).
+  int getPassivityMode() const { return m_passivityMode; }
+  /// Per actuated joint, the largest damping the passivity layer may add [N m s/rad, or N s/m on a
+  /// prismatic joint], as set up by the last open(); empty while the layer is off or before open().
+  /// The option "passivity_max_damping" (0..1e4) gives one cap for every joint; without it, joint
+  /// i's cap is b_lin |dp/dq_i|^2 + b_ang |dtheta/dq_i|^2 at the rest joints: the damping of the
+  /// specification's m_maxLinearDamping b_lin (and m_maxAngularDamping b_ang on a device that senses
+  /// its orientation) at the tool, seen at the joint, from the policy's own kinematics.
+  std::vector<double> getPassivityDampingCaps();
+  /// The velocity guard of the passivity layer [rad/s or m/s], as set up by the last open(): the
+  /// option "passivity_min_rate" (0..1e3), else one sensor resolution over the rate estimator's
+  /// longest window (the slowest rate it resolves), the largest over the actuated joints, else
+  /// 1e-3 for ideal sensors. 0 while the layer is off or before open().
+  double getPassivityMinRate();
+  /// Net generated energy the passivity layer tolerates before it damps [J] (option
+  /// "passivity_energy_threshold", 0..10, default 0). A policy whose efforts include a conservative
+  /// field of its own (the TAU's gravity compensation, the planar devices' null-space potential)
+  /// gives out energy as the user moves it, which the layer counts like any other; a threshold above
+  /// that field's energy range leaves it alone, at the price of tolerating as much from the scene.
+  double getPassivityEnergyThreshold() const { return m_passivityEnergyThreshold; }
 
  protected:
   /// a_servoPeriod [s]: the device's control period (its board's rate). a_joints, a_actuators: what
@@ -225,6 +257,11 @@ class cUhapticsDevice : public cGenericHapticDevice {
   void tickLocked() noexcept;
   /// Reads the joints and passes them to sense(); false (nothing sensed) when there is no reading.
   bool readJointsLocked(bool a_first) noexcept;
+  /// open(), before the policy's reset(): the passivity layer's limits, guard and caps for the
+  /// board m_io opened.
+  void configurePassivityLocked();
+  /// The default damping caps (see getPassivityDampingCaps()), one per actuator.
+  std::vector<double> specificationDampingCapsLocked();
   /// sense() on positions from the sensors (rates by the estimator).
   void senseLocked(const double* a_positions, std::uint32_t a_sampleUs, bool a_first) noexcept;
   /// render() with the checks every backend applies: a fault or a non-finite effort sends zero.
@@ -251,7 +288,13 @@ class cUhapticsDevice : public cGenericHapticDevice {
   void writeStats(const std::string& a_path) noexcept;
 
   std::mutex m_mutex;  // the policy's: held by the thread that ticks and by subclass accessors
-  std::unique_ptr<uhaptics::DevicePolicy> m_policy;  // setPolicy()
+  std::unique_ptr<uhaptics::DevicePolicy> m_policy;  // setPolicy(); the passivity layer when on
+  uhaptics::PassivePolicy* m_passive = nullptr;       // the layer in m_policy, nullptr when off
+  const int m_passivityMode;                           // option "passivity"
+  const double m_passivityMaxDamping;                  // option "passivity_max_damping", NaN: from the spec
+  const double m_passivityMinRate;                     // option "passivity_min_rate", NaN: from the sensors
+  const double m_passivityEnergyThreshold;             // option "passivity_energy_threshold" [J]
+  std::array<double, C_MAX_DOF> m_restJoints{};        // setPolicy()
   State m_state;       // the policy's latest sense()
   const double m_servoPeriod;
   const bool m_servoThreadRenders;  // emulated, usb

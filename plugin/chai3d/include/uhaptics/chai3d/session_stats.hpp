@@ -12,7 +12,8 @@
 namespace uhaptics {
 
 /// A figure of the device's own rendering method (e.g. the LQR wall's engagements, its deepest
-/// penetration): a count or a maximum, named by the device.
+/// penetration) or of the passivity layer around it: a count, a maximum or a latest value, named by
+/// the device.
 struct RendererFigure {
   using Kind = FigureKind;
   const char* name = "";  // a string literal of the device class: lives as long as the program
@@ -21,7 +22,8 @@ struct RendererFigure {
 };
 
 struct SessionStatsSnapshot {
-  static constexpr int kMaxFigures = 12;
+  /// The TAU's ten figures plus the passivity layer's six, with room to spare.
+  static constexpr int kMaxFigures = 20;
   std::uint64_t ticks = 0;          // servo ticks simulated / sent to the device
   double seconds = 0.0;             // wall time since start()
   double rate_hz = 0.0;             // ticks / seconds
@@ -75,9 +77,10 @@ class SessionStats final : public FigureRecorder {
   /// literal) and returns its id for count()/observeMaximum(). start() zeroes the values and keeps
   /// the declarations. Throws uhaptics::Error past kMaxFigures or for a repeated name.
   int declareFigure(const char* name, FigureKind kind) override;
-  /// Servo thread: adds n to a count / raises a maximum (non-finite values are ignored).
+  /// Servo thread: adds n to a count / raises a maximum / sets a value (non-finite values are ignored).
   void count(int id, std::uint64_t n = 1) noexcept override;
   void observeMaximum(int id, double value) noexcept override;
+  void setValue(int id, double value) noexcept override;
 
  private:
   double threshold_;

@@ -39,6 +39,10 @@
 //   under the guard nothing is added and the excess waits on E_out.
 // - Cap without division by ~0: alpha_i = max_damping_i whenever excess > max_damping_i T |qd|^2,
 //   so the quotient is only formed when it is at most the cap.
+// - Effort limits (optional): a device holds each command to its actuators' limits, and work the
+//   observer counts must be the work of what the device applies. With limits set, the renderer's
+//   effort is held first, then the damped command; the damping the limit cut off is neither
+//   applied nor counted as dissipated, and the energy it would have taken stays on E_out.
 //
 // Joint units: efforts in N m (N for a prismatic joint), positions in rad (m), damping in
 // N m s/rad (N s/m), energy in J. noexcept and allocation-free per tick (N = Eigen::Dynamic uses
@@ -76,6 +80,10 @@ struct PassivityControllerOptions {
   /// Net generated energy tolerated before damping is added [J], finite and >= 0; only the energy
   /// above it is dissipated.
   double energy_threshold = 0.0;
+  /// Per-joint effort limits [N m], each > 0 (infinity: none); when non-empty (size = joint count)
+  /// the enabled controller holds every command to +-limit and observes the held command.
+  /// Disabled, it passes the command through unchanged, limits included.
+  Eigen::Matrix<double, Eigen::Dynamic, 1, Eigen::ColMajor, kMaxDim, 1> effort_limit;
 };
 
 template <int N>
@@ -111,6 +119,14 @@ class PassivityController {
                     ") must be finite and >= 0 [N m s/rad]");
       cap_(i) = per_joint(i);
     }
+    const auto& limit = options.effort_limit;
+    if (limit.size() != 0 && limit.size() != dim)
+      throw Error("PassivityController: effort_limit has " + std::to_string(limit.size()) + " entries, accepted 0 or " +
+                  std::to_string(dim));
+    for (Eigen::Index i = 0; i < limit.size(); ++i)
+      if (!(limit(i) > 0.0))
+        throw Error("PassivityController: effort_limit(" + std::to_string(i) + ") must be > 0 [N m]");
+    limited_ = limit.size() != 0;
     last_q_ = Vector::Zero(dim);
     last_u_ = Vector::Zero(dim);
     brake_ = Vector::Zero(dim);
@@ -166,8 +182,21 @@ class PassivityController {
       }
     }
 
-    if (options_.enabled) u_out = u - brake_;
-    else u_out = u;  // bit for bit
+    if (!options_.enabled) {
+      u_out = u;  // bit for bit
+    } else if (!limited_) {
+      u_out = u - brake_;
+    } else {
+      // What the device applies: the renderer's effort held to the limit, then the damped command
+      // held again; brake_ keeps only the damping that survived, which is what dissipates.
+      u_out.resize(dim_);
+      for (Eigen::Index i = 0; i < dim_; ++i) {
+        const double limit = options_.effort_limit(i);
+        const double held = std::clamp(static_cast<double>(u(i)), -limit, limit);
+        u_out(i) = std::clamp(held - brake_(i), -limit, limit);
+        brake_(i) = held - u_out(i);
+      }
+    }
     if (!u_out.allFinite()) return fail(Fault::kNonFiniteResult, true, u_out);
     last_u_ = u_out;
     last_fault_ = Fault::kNone;
@@ -180,6 +209,16 @@ class PassivityController {
     peak_ = -std::numeric_limits<double>::infinity();
     active_ticks_ = faults_ = 0;
     last_fault_ = Fault::kNone;
+    started_ = false;
+    last_u_.setZero();
+    brake_.setZero();
+    alpha_.setZero();
+  }
+
+  /// A period whose command this controller did not produce (no reading, or efforts another stage
+  /// chose): the next update() starts a new observation chain without counting the work across
+  /// the gap. Energy, peak and counters are kept.
+  void interrupt() noexcept {
     started_ = false;
     last_u_.setZero();
     brake_.setZero();
@@ -231,6 +270,7 @@ class PassivityController {
   std::uint64_t faults_ = 0;
   Fault last_fault_ = Fault::kNone;
   bool started_ = false;
+  bool limited_ = false;  // options_.effort_limit is set
 };
 
 }  // namespace uhaptics

@@ -27,8 +27,9 @@ namespace uhaptics {
 /// The most joints a policy reports (CHAI3D's C_MAX_DOF).
 inline constexpr int kMaxSensedJoints = 16;
 
-/// What a policy's figures are: a count of events or the maximum of a value.
-enum class FigureKind { kCount, kMaximum };
+/// What a policy's figures are: a count of events, the maximum of a value, or a value's latest
+/// reading (a running total that may fall, e.g. the net energy a device has given out).
+enum class FigureKind { kCount, kMaximum, kValue };
 
 /// Where a policy records the figures that show its method at work (the adapter's session
 /// statistics, SessionStats; none() where nobody reads them).
@@ -38,9 +39,10 @@ class FigureRecorder {
   /// Set-up: declares a figure (name: a string literal) and returns its id for the tick's calls.
   /// Throws uhaptics::Error when the recorder is full or the name is taken.
   virtual int declareFigure(const char* name, FigureKind kind) = 0;
-  /// Servo tick: adds n to a count / raises a maximum (non-finite values are ignored).
+  /// Servo tick: adds n to a count / raises a maximum / sets a value (non-finite values are ignored).
   virtual void count(int id, std::uint64_t n = 1) noexcept = 0;
   virtual void observeMaximum(int id, double value) noexcept = 0;
+  virtual void setValue(int id, double value) noexcept = 0;
   /// A recorder that keeps nothing (ids are valid, values are dropped).
   static FigureRecorder& none() noexcept;
 };
