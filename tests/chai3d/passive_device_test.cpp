@@ -295,7 +295,7 @@ TEST_CASE("passive device: non-finite commands or samples send zero and count a 
   cVector3d sent;
   device->getForce(sent);
   CHECK(sent.equals(cVector3d(0, 0, 0)));
-  CHECK(passive->setForceAndTorque(cVector3d(1, 0, 0), cVector3d(0, 0, INFINITY)) == C_ERROR);
+  CHECK(passive->setForceAndTorque(cVector3d(1, 0, 0), cVector3d(0, 0, std::numeric_limits<double>::infinity())) == C_ERROR);
   device->getForce(sent);
   CHECK(sent.equals(cVector3d(0, 0, 0)));
   device->m_x = nan;  // a broken sensor
