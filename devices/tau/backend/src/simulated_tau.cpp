@@ -25,6 +25,8 @@ SimulatedTau::SimulatedTau(const TauModel& model, const SimulatedTauOptions& opt
     : model_(model), options_(options), data_(model), rng_(options.seed) {
   if (options_.substeps == 0) options_.substeps = model.simulationSubsteps();
   if (options_.substeps < 1 || options_.substeps > 1000) throw Error("SimulatedTau: substeps must be in [1, 1000]");
+  if (!(options_.period >= 0.0 && options_.period <= 0.1)) throw Error("SimulatedTau: period must be in [0, 0.1] s");
+  if (options_.period == 0.0) options_.period = model.servoPeriod();
   if (options_.max_delay_samples < 0 || options_.max_delay_samples > 100)
     throw Error("SimulatedTau: max_delay_samples must be in [0, 100]");
   if (!(options_.tool_damping >= 0.0) || !(options_.tool_rotational_damping >= 0.0) || !(options_.hand.stiffness >= 0.0) ||
@@ -116,7 +118,7 @@ Fault SimulatedTau::step(const Vec6& tau_command, const Vec3& external_force) no
   const TauModel::EndStops& stops = model_.endStops();
   const Vec3 centre = model_.homePose().head<3>();
   const Vec3 a0 = data_.pose.tail<3>() - model_.homePose().tail<3>();
-  const double T = model_.servoPeriod();
+  const double T = options_.period;
   const double dt = T / options_.substeps;
   Vec6 q = q_, qd = qd_;
   Vec3 hand_sum = Vec3::Zero();

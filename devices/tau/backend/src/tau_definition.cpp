@@ -26,6 +26,11 @@ DeviceDefinition definition() {
   d.make_plant = [](const std::string& path) -> std::unique_ptr<BoardPlant> {
     return std::make_unique<TauBoardPlant>(TauModel::load(path), TauBoardPlant::Options{});
   };
+  d.make_plant_stepped = [](const std::string& path, double step_period) -> std::unique_ptr<BoardPlant> {
+    TauBoardPlant::Options options;
+    options.step_period = step_period;
+    return std::make_unique<TauBoardPlant>(TauModel::load(path), options);
+  };
   return d;
 }
 

@@ -12,6 +12,7 @@ SimulatedTauOptions tauOptions(const TauBoardPlant::Options& o) {
   s.end_stops = o.end_stops;
   s.tool_damping = o.tool_damping;
   s.tool_rotational_damping = o.tool_rotational_damping;
+  s.period = o.step_period;
   return s;
 }
 }  // namespace
@@ -19,7 +20,7 @@ SimulatedTauOptions tauOptions(const TauBoardPlant::Options& o) {
 TauBoardPlant::TauBoardPlant(TauModel model, const Options& options)
     : model_(std::make_unique<const TauModel>(std::move(model))),
       sim_(*model_, tauOptions(options)),
-      clock_(model_->servoPeriod()) {
+      clock_(sim_.period()) {
   sim_.reset(model_->homeJoints());
   if (options.hold_tool) {
     sim_.setHand(model_->homePose().head<3>(), Vec3::Zero(), Vec3::Zero());

@@ -69,6 +69,11 @@ struct DeviceDefinition {
   /// The simulated device as its board drives it, with its own user (the "sim" joint I/O and the
   /// board emulator's device), its model loaded from the parameter file at params_path.
   std::unique_ptr<BoardPlant> (*make_plant)(const std::string& params_path) = nullptr;
+  /// The same simulated device integrating in steps of step_period [s] instead of its board's
+  /// sampling period, for a caller that runs a faster servo loop on the plant (the Z-width harness
+  /// at 2-4 kHz); nullptr where make_plant's plant already resolves any period (its own step is
+  /// finer) or has no step to change. Throws Error for a step the simulation refuses.
+  std::unique_ptr<BoardPlant> (*make_plant_stepped)(const std::string& params_path, double step_period) = nullptr;
 };
 
 /// The registered devices, in registration order (validated once: names and codes unique).

@@ -28,7 +28,11 @@ struct HandModel {
 };
 
 struct SimulatedTauOptions {
-  int substeps = 0;               // 0: the model file's rates/simulation_substeps
+  int substeps = 0;               // per period; 0: the model file's rates/simulation_substeps
+  // One step() [s]: the servo period the simulation is driven at. 0: the model's servo period (its
+  // board's 1 kHz); shorter for a faster servo loop (the Z-width harness's 2-4 kHz), where the
+  // configuration-dependent terms are then refreshed at that rate too.
+  double period = 0.0;
   int max_delay_samples = 0;      // command delay drawn uniformly from 0..max each sample
   double tool_damping = 0.0;      // mechanical damping at the tool, translational, N s/m
   double tool_rotational_damping = 0.0;  // on the tool's orientation (Euler-angle) rates, N m s/rad
@@ -49,7 +53,7 @@ class SimulatedTau {
  public:
   /// Starts at rest at the model's home joints; keeps a reference to model (it must outlive the
   /// simulation). Throws uhaptics::Error when an option is out of range (substeps 1..1000 after the
-  /// file's default, max_delay_samples 0..100, negative damping or hand parameters,
+  /// file's default, period not in [0, 0.1] s, max_delay_samples 0..100, negative damping or hand parameters,
   /// relinearize_tolerance outside [0, 0.1]) or the forward kinematics fails at home.
   SimulatedTau(const TauModel& model, const SimulatedTauOptions& options);
   /// At rest at joint angles q0 [rad] (throws Error if the forward kinematics fails there).
@@ -75,6 +79,8 @@ class SimulatedTau {
   const Vec3& handForce() const noexcept { return hand_force_; }
   const Vec6& appliedTorque() const noexcept { return applied_; }
   double time() const noexcept { return time_; }
+  /// One step()'s length [s] (SimulatedTauOptions::period, resolved).
+  double period() const noexcept { return options_.period; }
   const TauModel& model() const noexcept { return model_; }
 
  private:

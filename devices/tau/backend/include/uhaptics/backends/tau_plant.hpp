@@ -25,6 +25,9 @@ class TauBoardPlant final : public HeldTorquePlant<6> {
     // tolerate: it drifts, and diverges with a 2-period delay (docs/hardware.md, "Why the emulated
     // TAU board damps the handle"). >= 0.
     double tool_rotational_damping = 0.01;
+    // The simulation's step [s] (SimulatedTauOptions::period): 0, the model's servo period, at which
+    // the board samples; shorter for a caller that runs its servo loop on the plant faster.
+    double step_period = 0.0;
   };
   /// Starts at rest at the model's home joints. Throws uhaptics::Error on invalid options (see
   /// SimulatedTau) or when the model does not assemble at home.
