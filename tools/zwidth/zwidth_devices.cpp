@@ -59,7 +59,14 @@ experiments::ZWidthDevice zwidthDevice(const DeviceDefinition& device, const std
                 std::to_string(joint));
   d.joint = joint;
   const std::string path = params_dir + "/" + device.params_file;
-  d.make_plant = [make = device.make_plant, path] { return make(path); };
+  // The board's own plant where its step resolves the loop's period; the device's stepped plant
+  // (make_plant_stepped) for a faster loop.
+  const double board_period = 1.0 / d.spec.sample_rate_hz;
+  d.make_plant = [make = device.make_plant, stepped = device.make_plant_stepped, path,
+                  board_period](double period) -> std::unique_ptr<BoardPlant> {
+    if (stepped && period < board_period * (1.0 - 1e-9)) return stepped(path, period);
+    return make(path);
+  };
   const DeviceDefinition* definition = &device;  // registrations live for the program
   d.make_free_space = [definition, params_dir, actuators]() -> std::unique_ptr<experiments::FreeSpaceControl> {
     return std::make_unique<PolicyFreeSpace>(makeDevicePolicy(*definition, params_dir), actuators);

@@ -4,6 +4,7 @@
 #include <array>
 #include <cmath>
 #include <cstdint>
+#include <cstdio>
 #include <utility>
 
 #include "uhaptics/backends/joint_io.hpp"
@@ -28,6 +29,10 @@ constexpr int kIdCycles = 10;
 constexpr double kIdMinSteps = 20.0;
 constexpr double kIdFirstAmplitude = 0.1;  // of the effort limit
 constexpr double kIdMaxAmplitude = 0.3;
+// The identification's motion must span this many sensor steps for the b it returns to hold the
+// bound to 10 %: the work per cycle is read through the steps, an error of about one step in the
+// amplitude.
+constexpr double kBoundMinSteps = 10.0;
 // A wall run has run away when the joint is this many press depths past the wall.
 constexpr double kRunawayDepths = 50.0;
 // ... and diverges when it oscillates wider than this many press depths.
@@ -82,7 +87,7 @@ class ServoHarness {
  public:
   ServoHarness(const ZWidthDevice& device, double period, int delay, FreeSpaceControl* free_space)
       : device_(device),
-        plant_(device.make_plant ? device.make_plant() : nullptr),
+        plant_(device.make_plant ? device.make_plant(period) : nullptr),
         period_(period),
         delay_(delay),
         free_space_(free_space),
@@ -250,7 +255,7 @@ double passivityMaxDamping(const JointIdentification& id, double period, int del
 
 bool plantResolvesPeriod(const ZWidthDevice& device, double period) {
   checkJoint(device);
-  std::unique_ptr<BoardPlant> plant = device.make_plant();
+  std::unique_ptr<BoardPlant> plant = device.make_plant(period);
   if (!plant) throw Error("Z-width: device '" + device.name + "' has no plant");
   Channels before{}, after{};
   Vec3 p0 = Vec3::Zero(), v0 = Vec3::Zero(), p1 = Vec3::Zero(), v1 = Vec3::Zero();
@@ -279,11 +284,19 @@ JointIdentification identifyJoint(const ZWidthDevice& device, double frequency_h
   Excitation first = excite(device, free_space.get(), amplitude, frequency);
   const Excitation still = excite(device, free_space.get(), 0.0, frequency);
   if (!first.ok || !still.ok) return id;
-  // Position-driven: the torque changes nothing the sensors see.
-  double difference = 0.0;
-  for (std::size_t k = 0; k < first.q.size() && k < still.q.size(); ++k)
-    difference = std::max(difference, std::abs(first.q[k] - still.q[k]));
-  if (!(difference > std::max(step, 1e-12))) return id;
+  // Position-driven: the torque changes nothing the sensors see, even the largest one (at a high
+  // frequency the first torque may move an inertia by less than a sensor step).
+  const auto moved = [&](const Excitation& e) {
+    double difference = 0.0;
+    for (std::size_t k = 0; k < e.q.size() && k < still.q.size(); ++k)
+      difference = std::max(difference, std::abs(e.q[k] - still.q[k]));
+    return difference > std::max(step, 1e-12);
+  };
+  if (!moved(first)) {
+    amplitude = kIdMaxAmplitude * limit;
+    first = excite(device, free_space.get(), amplitude, frequency);
+    if (!first.ok || !moved(first)) return id;
+  }
 
   // Quantized sensors: a larger torque (then, at the default frequency, a lower frequency) until the
   // motion spans enough steps.
@@ -521,6 +534,60 @@ std::vector<WallCase> zwidthCases(const ZWidthOptions& options, double b) {
   return cases;
 }
 
+bool boundResolved(const DeviceZWidth& result, const Boundary& boundary) noexcept {
+  return !(result.resolution > 0.0) || boundary.identification.amplitude >= kBoundMinSteps * result.resolution;
+}
+
+bool colgateBrownApplies(const ZWidthDevice& device, const JointIdentification& id, const WallScript& script,
+                         std::string* why) {
+  const auto no = [why](const char* reason) {
+    if (why) *why = reason;
+    return false;
+  };
+  if (!id.responds) return no("the joint does not follow its effort (a position-driven user moves it)");
+  if (!(id.inertia > 0.0)) return no("the joint's response is not mass-like (a stiffness dominates it)");
+  if (!(id.damping > 0.0)) return no("the joint meets no positive viscous damping");
+  // Energy per cycle of a sinusoid of amplitude A at w: viscous b pi w A^2, Coulomb 4 f_c A.
+  const double w = 2.0 * kPi * id.frequency_hz;
+  const double coulomb = 4.0 * id.coulomb * id.amplitude;
+  const double viscous = id.damping * kPi * w * id.amplitude * id.amplitude;
+  if (coulomb > 0.1 * (coulomb + viscous))
+    return no("Coulomb friction takes over 10 % of the joint's dissipation, which the viscous bound leaves out");
+  // A wall too soft for the press to reach it (the press torque is K times the press depth): what
+  // the device does with the user alone.
+  std::unique_ptr<FreeSpaceControl> free_space = device.make_free_space ? device.make_free_space() : nullptr;
+  const WallRun alone = runWall(device, id, WallCase{1000.0, 0, 0.0, false}, 1e-3, script, free_space.get());
+  if (alone.outcome != WallOutcome::kPassive)
+    return no("the device's own control delivers energy to the user with no wall in reach: no passive K to bound");
+  if (why) why->clear();
+  return true;
+}
+
+ReproductionTable zwidthReproduction(const std::vector<DeviceZWidth>& results) {
+  ReproductionTable table;
+  char quantity[160];
+  for (const DeviceZWidth& r : results) {
+    if (!r.bound_applies) continue;
+    for (const Boundary& b : r.boundaries) {
+      if (b.wall.delay != 0 || b.wall.damping != 0.0 || b.wall.passivity || !(b.k_colgate > 0.0)) continue;
+      if (!boundResolved(r, b)) continue;
+      std::snprintf(quantity, sizeof quantity, "%s joint %d, %g kHz: spring wall's K_max / (2 b / T)", r.name.c_str(),
+                    r.joint, b.wall.rate_hz / 1000.0);
+      // NaN (nothing passive) or a lower bound (passive to the ceiling) misses the interval.
+      const double ratio = b.above_range ? std::numeric_limits<double>::infinity() : b.k_max / b.k_colgate;
+      table.add({kStabilityRows, quantity, 1.0, ratio, "within 10 % of Colgate-Brown", false, "", {},
+                 Accepted::within(1.0, 0.10)});
+    }
+    const double off = boundaryStiffness(r, 1000.0, 0, false);
+    const double on = boundaryStiffness(r, 1000.0, 0, true);
+    if (std::isnan(off) && std::isnan(on)) continue;  // 1 kHz not swept
+    std::snprintf(quantity, sizeof quantity, "%s joint %d, 1 kHz: passivity controller's K_max gain", r.name.c_str(),
+                  r.joint);
+    table.addBound(kStabilityRows, quantity, on / off, ">= 2", Accepted::atLeast(2.0), "x");
+  }
+  return table;
+}
+
 std::vector<DeviceZWidth> sweepZWidth(const std::vector<ZWidthDevice>& devices, const ZWidthOptions& options,
                                       const std::function<void()>& on_boundary) {
   if (options.rates_hz.empty()) throw Error("Z-width: no servo rate to sweep");
@@ -544,7 +611,10 @@ std::vector<DeviceZWidth> sweepZWidth(const std::vector<ZWidthDevice>& devices, 
     r.joint = device.joint;
     r.resolution = device.spec.position_resolution[device.joint];
     r.identification = identifyJoint(device);
-    if (!r.identification.responds) return;
+    if (!r.identification.responds) {
+      colgateBrownApplies(device, r.identification, options.script, &r.bound_note);
+      return;
+    }
     if (!(r.identification.inertia > 0.0) && device.make_free_space) {
       // The free-space control shapes the response (a null-space controller's stiffness outweighs the
       // inertia term): the inertia is the bare plant's.
@@ -559,6 +629,9 @@ std::vector<DeviceZWidth> sweepZWidth(const std::vector<ZWidthDevice>& devices, 
       at_rate.inertia = r.identification.inertia;  // measured at the default frequencies
       r.rate_identification.push_back(at_rate);
     }
+    JointIdentification at_1khz = identifyJoint(device, contactFrequencyHz(r.identification, 1000.0));
+    at_1khz.inertia = r.identification.inertia;
+    r.bound_applies = colgateBrownApplies(device, at_1khz, options.script, &r.bound_note);
   });
 
   struct Task {
@@ -627,7 +700,7 @@ ZWidthDevice massDamperDevice(const MassDamperParams& params) {
   d.spec.descriptor.effort_limit[0] = params.effort_limit;
   d.spec.servo_rate_hz = 1000.0;
   d.spec.sample_rate_hz = 1000.0;
-  d.make_plant = [params] { return std::make_unique<MassDamperPlant>(params); };
+  d.make_plant = [params](double) { return std::make_unique<MassDamperPlant>(params); };
   d.joint = 0;
   d.param_viscous = params.damping;
   d.param_coulomb = 0.0;

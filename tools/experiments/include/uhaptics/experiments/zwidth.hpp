@@ -53,6 +53,7 @@
 
 #include "uhaptics/backends/board_plant.hpp"
 #include "uhaptics/backends/device_definition.hpp"
+#include "uhaptics/experiments/reproduction.hpp"
 
 namespace uhaptics::experiments {
 
@@ -74,8 +75,9 @@ struct ZWidthDevice {
   std::string name;
   /// Joint and actuator counts, effort limits and per-joint sensor resolution (0: ideal).
   BoardSpec spec;
-  /// A fresh plant at rest at its start, as the device's "sim" backend would make it.
-  std::function<std::unique_ptr<BoardPlant>()> make_plant;
+  /// A fresh plant at rest at its start, as the device's "sim" backend would make it, for a servo
+  /// loop of this period [s] (a plant with its own fixed step may ignore it: plantResolvesPeriod).
+  std::function<std::unique_ptr<BoardPlant>(double period)> make_plant;
   /// The device's free-space control; empty: none (zero efforts).
   std::function<std::unique_ptr<FreeSpaceControl>()> make_free_space;
   /// The actuated joint the wall acts on (0 .. actuators - 1).
@@ -190,7 +192,11 @@ struct DeviceZWidth {
   std::vector<JointIdentification> rate_identification;
   std::vector<double> skipped_rates_hz;  // faster than the plant's own integration step
   std::vector<Boundary> boundaries;
-  std::string note;                 // why the bound does not apply directly, or why nothing was measured
+  std::string note;                 // why nothing was measured (empty: the boundaries were searched)
+  /// Whether Colgate and Brown's bound describes this joint (colgateBrownApplies at 1 kHz): only
+  /// there do the reproduction rows hold the measured boundary to it. bound_note: why it does not.
+  bool bound_applies = false;
+  std::string bound_note;
 };
 
 /// Damping cap of the passivity controller at period T and delay d: m_eff / (2 T (1 + d)), half the
@@ -232,6 +238,16 @@ Boundary findBoundary(const ZWidthDevice& device, const JointIdentification& id,
 /// controller at every delay (B = 0).
 std::vector<WallCase> zwidthCases(const ZWidthOptions& options, double b);
 
+/// Whether Colgate and Brown's bound K < 2 b / T describes the wall joint: it follows its effort
+/// with a mass-like response (inertia > 0) and meets positive viscous damping b; Coulomb friction
+/// takes under 10 % of the energy the identification dissipated (the bound leaves it out, and it
+/// raises the boundary); and the device with its free-space control is passive with the wall out of
+/// reach (a device whose own control delivers energy, such as a null-space controller, has no
+/// passive K to bound). `id`: identified at the rate's contact frequency. False with the reason in
+/// *why (when given).
+bool colgateBrownApplies(const ZWidthDevice& device, const JointIdentification& id, const WallScript& script,
+                         std::string* why = nullptr);
+
 /// The whole sweep: identifies each device (the inertia on the bare plant, without its free-space
 /// control, when the response with it is not mass-like), then b and f_c at each rate's contact
 /// frequency, then searches every case on every device the plant resolves, in parallel
@@ -242,6 +258,18 @@ std::vector<DeviceZWidth> sweepZWidth(const std::vector<ZWidthDevice>& devices, 
 
 /// The largest k_max of a device's boundaries matching (rate, delay, B = 0, passivity); NaN if none.
 double boundaryStiffness(const DeviceZWidth& device, double rate_hz, int delay, bool passivity) noexcept;
+
+/// Whether the boundary's identification resolved b: its motion at the rate's contact frequency
+/// spanned at least 10 sensor steps (an ideal sensor always does). A coarse encoder at a fast rate
+/// sees the contact mode move by a few counts within the effort limit; b read through them is not
+/// accurate to the rows' 10 %, and the wall's boundary there is set by the quantization.
+bool boundResolved(const DeviceZWidth& result, const Boundary& boundary) noexcept;
+
+/// The rows the sweep adds to the reproduction report (paper column kStabilityRows): on every
+/// device whose joint the bound describes (bound_applies), at each rate with delay 0 and B = 0 where
+/// the identification resolved b (boundResolved), the measured boundary over 2 b / T within 10 %;
+/// at 1 kHz the passivity controller's gain, at least 2.
+ReproductionTable zwidthReproduction(const std::vector<DeviceZWidth>& results);
 
 /// A 1-DoF mass-damper with a soft centring spring (m q'' + b q' + k q = u), integrated exactly
 /// enough (RK4, steps of at most 10 us) that its passivity boundary is 2 b / T: the closed-form
