@@ -4,12 +4,16 @@
 // analytic bounds of Colgate and Brown (1994) and Abbott and Okamura (2005).
 //   uhaptics-zwidth [--device NAME|all] [--rates HZ...] [--max-delay D] [--passivity both|on|off]
 //                   [--damping-fractions F...] [--precision P] [--joint J] [--threads T] [--out DIR]
-// Writes devices.csv, boundaries.csv, runs.csv and zwidth_<device>.png into --out.
+// Writes devices.csv, boundaries.csv, runs.csv, zwidth_<device>.png, summary.txt and reproduction.csv
+// (the boundary against Colgate and Brown where the bound applies, the passivity controller's gain)
+// into --out. Exit status as the experiment tools: 0 every row passes, 1 one fails, 2 an error.
 #include <CLI/CLI.hpp>
 #include <chrono>
 #include <cmath>
+#include <cstdarg>
 #include <cstdio>
 #include <ctime>
+#include <fstream>
 #include <string>
 #include <vector>
 
@@ -83,34 +87,63 @@ const Boundary* findCase(const DeviceZWidth& r, double rate, int delay, bool pas
   return nullptr;
 }
 
-void printSummary(const std::vector<DeviceZWidth>& results, const ZWidthOptions& options) {
-  std::printf("\n%-12s %4s %8s %12s %12s %7s %12s %12s %6s\n", "device", "joint", "rate Hz", "K_max meas", "K_max C-B",
+// printf into a string.
+__attribute__((format(printf, 2, 3))) void appendf(std::string& out, const char* format, ...) {
+  char buf[512];
+  va_list args;
+  va_start(args, format);
+  std::vsnprintf(buf, sizeof buf, format, args);
+  va_end(args);
+  out += buf;
+}
+
+// The table at delay 0 and B = 0, and where the bound does not describe a joint, why (summary.txt).
+std::string summaryText(const std::vector<DeviceZWidth>& results, const ZWidthOptions& options) {
+  std::string out;
+  appendf(out, "\n%-12s %4s %8s %12s %12s %7s %12s %12s %6s\n", "device", "joint", "rate Hz", "K_max meas", "K_max C-B",
               "ratio", "K_max A-O", "K_max PC", "gain");
   for (const DeviceZWidth& r : results) {
     if (!r.note.empty()) {
-      std::printf("%-12s %4d  %s\n", r.name.c_str(), r.joint, r.note.c_str());
+      appendf(out, "%-12s %4d  %s\n", r.name.c_str(), r.joint, r.note.c_str());
       continue;
     }
     for (const double rate : options.rates_hz) {
       const Boundary* off = findCase(r, rate, 0, false);
       const Boundary* on = findCase(r, rate, 0, true);
       if (!off && !on) {
-        std::printf("%-12s %4d %8.0f  not simulated: faster than the plant's own integration step\n", r.name.c_str(),
+        appendf(out, "%-12s %4d %8.0f  not simulated: faster than the plant's own integration step\n", r.name.c_str(),
                     r.joint, rate);
         continue;
       }
       const Boundary* any = off ? off : on;
       const double measured = off ? off->k_max : std::nan("");
       const double with_pc = on ? on->k_max : std::nan("");
-      std::printf("%-12s %4d %8.0f %11.4g%s %12.4g %7.3f %12.4g %11.4g%s %6.2f\n", r.name.c_str(), r.joint, rate,
+      appendf(out, "%-12s %4d %8.0f %11.4g%s %12.4g %7.3f %12.4g %11.4g%s %6.2f\n", r.name.c_str(), r.joint, rate,
                   measured, off && off->above_range ? "+" : " ", any->k_colgate,
                   any->k_colgate > 0.0 ? measured / any->k_colgate : std::nan(""), any->k_quantization, with_pc,
                   on && on->above_range ? "+" : " ", with_pc / measured);
     }
   }
-  std::printf("K in N m/rad (N/m for a prismatic joint); C-B: Colgate-Brown 2 b / T with b identified on the plant; "
+  appendf(out, "K in N m/rad (N/m for a prismatic joint); C-B: Colgate-Brown 2 b / T with b identified on the plant; "
               "A-O: Abbott-Okamura 2 f_c / step (inf: ideal sensor); PC: the passivity controller on; '+': passive up "
               "to the search's ceiling (a lower bound).\n");
+  for (const DeviceZWidth& r : results) {
+    if (r.note.empty() && !r.bound_applies)
+      appendf(out, "%s: Colgate-Brown's bound does not describe joint %d: %s.\n", r.name.c_str(), r.joint,
+              r.bound_note.c_str());
+    if (!r.bound_applies) continue;
+    for (const double rate : options.rates_hz) {
+      const Boundary* off = findCase(r, rate, 0, false);
+      if (off && !boundResolved(r, *off))
+        appendf(out,
+                "%s at %g Hz: not checked against the bound: the identification at the contact mode's %.0f Hz moved "
+                "joint %d by %.1f sensor steps with 0.6 of its effort limit (b needs 10); the boundary there is set by the "
+                "encoder's quantization.\n",
+                r.name.c_str(), rate, off->identification.frequency_hz, r.joint,
+                off->identification.amplitude / r.resolution);
+    }
+  }
+  return out;
 }
 
 }  // namespace
@@ -197,13 +230,18 @@ int main(int argc, char** argv) {
       }
       std::printf("\n");
     }
-    printSummary(results, options);
+    const std::string summary = summaryText(results, options);
+    std::printf("%s", summary.c_str());
     std::printf("%zu boundaries, %zu runs; wall time %.1f s on %u threads, CPU %.1f s\n", boundaries, runs, wall,
                 threads ? threads : hardwareThreads(), cpu);
 
     writeCsv(out, results, devices);
     tools::runPlotScript("zwidth.py", {out});
-    return tools::CommandLine::kAllPass;
+    const ReproductionTable table = zwidthReproduction(results);
+    table.writeCsv(out + "/reproduction.csv");
+    std::ofstream(out + "/summary.txt") << summary;
+    std::printf("\n%s\n", table.format().c_str());
+    return table.allPass() ? tools::CommandLine::kAllPass : tools::CommandLine::kRowsFail;
   } catch (const std::exception& e) {
     std::fprintf(stderr, "uhaptics-zwidth: %s\n", e.what());
     return tools::CommandLine::kRunError;

@@ -39,6 +39,9 @@ std::string markdownCell(std::string s) {
 
 std::string paperHeading(const std::string& paper) {
   if (paper == kChai3dRows) return "The plugin in CHAI3D — CHAI3D's own examples, unchanged, with each device";
+  if (paper == kStabilityRows)
+    return "Stability — the Z-width of each device (Colgate and Brown 1994) and the passivity layer (Hannaford and "
+           "Ryu 2002)";
   if (const DeviceDefinition* d = findDeviceByPaper(paper))
     return "Paper " + paper + " — " + d->paper.title + (d->paper.citation.empty() ? "" : " (" + d->paper.citation + ")");
   return "Paper " + paper;
@@ -131,12 +134,13 @@ std::string joinMetadata(const Metadata& metadata) {
 // "000 *title*" for a paper with a device, the CHAI3D rows' name, else the id.
 std::string paperCell(const std::string& paper) {
   if (paper == kChai3dRows) return "CHAI3D's unchanged examples";
+  if (paper == kStabilityRows) return "Stability (Z-width, passivity layer)";
   if (const DeviceDefinition* d = findDeviceByPaper(paper)) return paper + " *" + markdownCell(d->paper.title) + "*";
   return paper;
 }
 
 std::string devicesOf(const std::string& paper) {
-  if (paper == kChai3dRows) return "every device";
+  if (paper == kChai3dRows || paper == kStabilityRows) return "every device";
   std::string out;
   for (const DeviceDefinition* d : deviceDefinitions())
     if (d->paper.id == paper) out += (out.empty() ? "" : ", ") + d->title + " (`" + d->name + "`)";

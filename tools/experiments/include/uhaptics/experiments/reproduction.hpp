@@ -52,6 +52,10 @@ struct ReproductionRow {
   bool fails() const noexcept { return !pass && needs_data.empty(); }
 };
 
+/// The paper column of rows that check a device's physical stability (uhaptics-zwidth: the Z-width
+/// against Colgate and Brown's bound, the passivity layer's gain) rather than a paper's number.
+inline constexpr const char* kStabilityRows = "stability";
+
 /// "pass", "FAIL" or "needs data".
 std::string resultWord(const ReproductionRow& row);
 
