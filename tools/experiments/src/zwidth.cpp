@@ -11,6 +11,7 @@
 #include "uhaptics/core/fault.hpp"
 #include "uhaptics/core/passivity_controller.hpp"
 #include "uhaptics/experiments/parallel.hpp"
+#include "zwidth_common.hpp"
 
 namespace uhaptics::experiments {
 
@@ -18,7 +19,9 @@ namespace {
 
 using Channels = std::array<double, wire::kMaxChannels>;
 
-constexpr double kPi = 3.14159265358979323846;
+using zwidth_detail::kPi;
+using zwidth_detail::raisedCosine;
+using zwidth_detail::ticksFor;
 // Identification: the sinusoidal torque's frequency, its smooth onset, how many whole cycles are
 // measured, and how many sensor steps the motion must span to be measured through quantization.
 constexpr double kIdPeriod = 1e-3;
@@ -37,10 +40,6 @@ constexpr double kBoundMinSteps = 10.0;
 constexpr double kRunawayDepths = 50.0;
 // ... and diverges when it oscillates wider than this many press depths.
 constexpr double kDivergentDepths = 10.0;
-
-double raisedCosine(double x) noexcept { return x <= 0.0 ? 0.0 : x >= 1.0 ? 1.0 : 0.5 * (1.0 - std::cos(kPi * x)); }
-
-long ticksFor(double seconds, double period) noexcept { return std::lround(seconds / period); }
 
 // The 1-DoF plant of the closed-form check.
 class MassDamperPlant final : public BoardPlant {
