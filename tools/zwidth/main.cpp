@@ -4,22 +4,30 @@
 // analytic bounds of Colgate and Brown (1994) and Abbott and Okamura (2005).
 //   uhaptics-zwidth [--device NAME|all] [--rates HZ...] [--max-delay D] [--passivity both|on|off]
 //                   [--damping-fractions F...] [--precision P] [--joint J] [--threads T] [--out DIR]
+//                   [--task on|off|only]
 // Writes devices.csv, boundaries.csv, runs.csv, zwidth_<device>.png, summary.txt and reproduction.csv
 // (the boundary against Colgate and Brown where the bound applies, the passivity controller's gain)
-// into --out. Exit status as the experiment tools: 0 every row passes, 1 one fails, 2 an error.
+// into --out; with --task (on by default) also the task-space wall at the tool (task_zwidth.hpp):
+// task_boundaries.csv, stiffness.csv (the m_maxLinearStiffness it recommends per device and rate),
+// zwidth_task_<device>.png and their rows in summary.txt. Exit status as the experiment tools: 0
+// every row passes, 1 one fails, 2 an error.
 #include <CLI/CLI.hpp>
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdarg>
 #include <cstdio>
 #include <ctime>
 #include <fstream>
+#include <iomanip>
+#include <limits>
 #include <string>
 #include <vector>
 
 #include "uhaptics/backends/device_definition.hpp"
 #include "uhaptics/backends/params_location.hpp"
 #include "uhaptics/experiments/parallel.hpp"
+#include "uhaptics/experiments/task_zwidth.hpp"
 #include "uhaptics/experiments/zwidth.hpp"
 #include "uhaptics/tools/cli.hpp"
 #include "uhaptics/tools/csv.hpp"
@@ -33,6 +41,107 @@ using namespace uhaptics::experiments;
 namespace {
 
 constexpr const char* kMassDamper = "mass-damper";
+const Boundary* findCase(const DeviceZWidth& r, double rate, int delay, bool passivity) {
+  for (const Boundary& b : r.boundaries)
+    if (b.wall.rate_hz == rate && b.wall.delay == delay && b.wall.damping == 0.0 && b.wall.passivity == passivity)
+      return &b;
+  return nullptr;
+}
+
+// printf into a string.
+__attribute__((format(printf, 2, 3))) void appendf(std::string& out, const char* format, ...) {
+  char buf[512];
+  va_list args;
+  va_start(args, format);
+  std::vsnprintf(buf, sizeof buf, format, args);
+  va_end(args);
+  out += buf;
+}
+
+// The recommended m_maxLinearStiffness is this fraction of the measured task-space K_max: the K_max
+// is where the wall stops being passive for the scripted hand's damping (zero margin), bisected to
+// 2 %, and a lighter grip than the simulated hand's has less damping, so proportionally less K.
+constexpr double kStiffnessMargin = 0.8;
+
+void writeTaskCsv(const std::string& out, const std::vector<DeviceTaskZWidth>& results) {
+  // renderer: the device's own ("spring": J^T F) or the TAU's LQR wall; bound: 2 b_n / ((1 + 2 d) T);
+  // above_range: passive up to the search's ceiling (k_max a lower bound).
+  std::ofstream csv(out + "/task_boundaries.csv");
+  csv << std::setprecision(std::numeric_limits<double>::max_digits10);
+  csv << "device,rate_hz,delay,renderer,k_max,bound,ratio,k_fail,below_range,above_range,b_n,hand_damping,"
+         "rendered_stiffness,runs\n";
+  for (const DeviceTaskZWidth& r : results)
+    for (const TaskBoundary& b : r.boundaries)
+      csv << r.name << ',' << b.rate_hz << ',' << b.delay << ',' << b.renderer << ',' << b.k_max << ',' << b.k_colgate
+          << ',' << (b.k_colgate > 0.0 ? b.k_max / b.k_colgate : std::nan("")) << ',' << b.k_fail << ','
+          << (b.below_range ? 1 : 0) << ',' << (b.above_range ? 1 : 0) << ',' << b.b_n << ',' << r.hand_damping << ','
+          << b.rendered_stiffness << ',' << b.runs.size() << '\n';
+  if (!csv) throw Error(out + "/task_boundaries.csv: cannot write");
+  // outcome: 0 passive, 1 active, 2 limit cycle, 3 divergent.
+  std::ofstream runs(out + "/task_runs.csv");
+  runs << std::setprecision(std::numeric_limits<double>::max_digits10);
+  runs << "device,rate_hz,delay,renderer,stiffness,outcome,generated_energy,tolerance,press_force,max_penetration,"
+          "hold_penetration,hold_amplitude,hold_entries,final_amplitude,final_entries,rendered_stiffness\n";
+  for (const DeviceTaskZWidth& r : results)
+    for (const TaskBoundary& b : r.boundaries)
+      for (const TaskWallRun& run : b.runs)
+        runs << r.name << ',' << b.rate_hz << ',' << b.delay << ',' << b.renderer << ',' << run.stiffness << ','
+             << static_cast<int>(run.outcome) << ',' << run.generated_energy << ',' << run.tolerance << ','
+             << run.press_force << ',' << run.max_penetration << ',' << run.hold_penetration << ','
+             << run.hold_amplitude << ',' << run.hold_entries << ',' << run.final_amplitude << ','
+             << run.final_entries << ',' << run.rendered_stiffness << '\n';
+  if (!runs) throw Error(out + "/task_runs.csv: cannot write");
+  tools::CsvWriter stiffness(out + "/stiffness.csv", {"device", "rate_hz", "k_max_task", "recommended"});
+  for (const DeviceTaskZWidth& r : results)
+    for (const TaskBoundary& b : r.boundaries)
+      if (b.delay == 0 && b.renderer == "spring")
+        stiffness.row(r.name, {b.rate_hz, b.k_max, kStiffnessMargin * b.k_max});
+}
+
+// The task-space rows of summary.txt.
+std::string taskSummaryText(const std::vector<DeviceTaskZWidth>& results) {
+  std::string out;
+  appendf(out, "\nTask space: a wall at the tool, normal +z (device frame), CHAI3D's spring F = K p n through each "
+               "device's policy; the user a force source with the hand's damping b_h on the tool.\n");
+  appendf(out, "%-12s %-7s %8s %5s %12s %12s %7s %10s %12s\n", "device", "wall", "rate Hz", "delay", "K_max N/m",
+          "2 b_n/T", "ratio", "b_n N s/m", "rendered N/m");
+  for (const DeviceTaskZWidth& r : results) {
+    if (!r.note.empty()) {
+      appendf(out, "%-12s  %s\n", r.name.c_str(), r.note.c_str());
+      continue;
+    }
+    for (const TaskBoundary& b : r.boundaries)
+      appendf(out, "%-12s %-7s %8.0f %5d %11.4g%s %12.4g %7.3f %10.4g %12.4g\n", r.name.c_str(), b.renderer.c_str(),
+              b.rate_hz, b.delay, b.k_max, b.above_range ? "+" : b.below_range ? "-" : " ", b.k_colgate,
+              b.k_colgate > 0.0 ? b.k_max / b.k_colgate : std::nan(""), b.b_n, b.rendered_stiffness);
+  }
+  appendf(out, "b_n: damping along n identified with a sinusoidal force on the tool at the rate's contact frequency "
+               "(hand b_h included); rendered: press force / mean sensed penetration at the end of the hold (the LQR "
+               "wall's stiffness; about K for the spring); '+': passive to the search's ceiling; '-': nothing passive "
+               "down to its floor.\n");
+  appendf(out, "\nRecommended m_maxLinearStiffness [N/m] = %.2g x the spring's task K_max (delay 0):\n",
+          kStiffnessMargin);
+  std::vector<double> rates;
+  for (const DeviceTaskZWidth& r : results)
+    for (const TaskBoundary& b : r.boundaries)
+      if (std::find(rates.begin(), rates.end(), b.rate_hz) == rates.end()) rates.push_back(b.rate_hz);
+  std::sort(rates.begin(), rates.end());
+  appendf(out, "%-12s", "device");
+  for (const double rate : rates) appendf(out, " %9.0f Hz", rate);
+  appendf(out, "\n");
+  for (const DeviceTaskZWidth& r : results) {
+    if (!r.note.empty()) continue;
+    appendf(out, "%-12s", r.name.c_str());
+    for (const double rate : rates) {
+      double k = std::nan("");
+      for (const TaskBoundary& b : r.boundaries)
+        if (b.rate_hz == rate && b.delay == 0 && b.renderer == "spring") k = b.k_max;
+      appendf(out, " %12.4g", kStiffnessMargin * k);
+    }
+    appendf(out, "\n");
+  }
+  return out;
+}
 
 void writeCsv(const std::string& out, const std::vector<DeviceZWidth>& results,
               const std::vector<ZWidthDevice>& devices) {
@@ -78,23 +187,6 @@ void writeCsv(const std::string& out, const std::vector<DeviceZWidth>& results,
                            static_cast<double>(run.hold_entries), run.final_amplitude,
                            static_cast<double>(run.final_entries)});
   }
-}
-
-const Boundary* findCase(const DeviceZWidth& r, double rate, int delay, bool passivity) {
-  for (const Boundary& b : r.boundaries)
-    if (b.wall.rate_hz == rate && b.wall.delay == delay && b.wall.damping == 0.0 && b.wall.passivity == passivity)
-      return &b;
-  return nullptr;
-}
-
-// printf into a string.
-__attribute__((format(printf, 2, 3))) void appendf(std::string& out, const char* format, ...) {
-  char buf[512];
-  va_list args;
-  va_start(args, format);
-  std::vsnprintf(buf, sizeof buf, format, args);
-  va_end(args);
-  out += buf;
 }
 
 // The table at delay 0 and B = 0, and where the bound does not describe a joint, why (summary.txt).
@@ -164,6 +256,7 @@ int main(int argc, char** argv) {
   std::string out = "out/zwidth";
   std::string params = defaultParamsDirectory();
   std::string free_space = "on";
+  std::string task = "on";
   app.footer("Exit status: 0 the sweep completed; 2 it could not complete; 101/105 a refused command-line value.");
   tools::CommandLine cli(app, "uhaptics-zwidth");
   cli.choice("--device", device, "device to sweep (all: every registered device and the 1-DoF mass-damper)",
@@ -180,6 +273,10 @@ int main(int argc, char** argv) {
   cli.choice("--free-space", free_space,
              "run each device's rendering policy in free space under the wall (on), or the bare plant (off)",
              {"on", "off"});
+  cli.choice("--task", task,
+             "also the task-space wall at the tool (on), not (off), or only it (only): task_boundaries.csv, "
+             "stiffness.csv",
+             {"on", "off", "only"});
   cli.outputFolder("--out", out, "output folder");
   cli.inputFolder("--params", params, "device parameter folder");
   if (const int status = cli.parse(argc, argv); status >= 0) return status;
@@ -204,11 +301,27 @@ int main(int argc, char** argv) {
     options.threads = threads;
     tools::ensureDirectory(out);  // after the devices are read: a refused file leaves no folder
 
-    const std::size_t cases = zwidthCases(options, 1.0).size() * devices.size();
+    const bool joint_space = task != "only";
+    std::vector<TaskZWidthDevice> task_devices;
+    if (task != "off") {
+      if (device == "all" || device == kMassDamper) task_devices.push_back(pointMassTaskDevice());
+      for (const DeviceDefinition* d : deviceDefinitions())
+        if (device == "all" || device == d->name) task_devices.push_back(taskZWidthDevice(*d, params));
+    }
+    TaskZWidthOptions task_options;
+    task_options.rates_hz = rates;
+    task_options.threads = threads;
+
+    std::size_t cases = joint_space ? zwidthCases(options, 1.0).size() * devices.size() : 0;
+    for (const TaskZWidthDevice& d : task_devices)
+      if (d.skip_note.empty()) cases += d.renderers.size() * task_options.rates_hz.size() * task_options.delays.size();
     tools::Progress progress("zwidth", cases);
     const auto t0 = std::chrono::steady_clock::now();
     const std::clock_t cpu0 = std::clock();
-    const std::vector<DeviceZWidth> results = sweepZWidth(devices, options, [&] { progress.advance(); });
+    std::vector<DeviceZWidth> results;
+    if (joint_space) results = sweepZWidth(devices, options, [&] { progress.advance(); });
+    std::vector<DeviceTaskZWidth> task_results;
+    if (!task_devices.empty()) task_results = sweepTaskZWidth(task_devices, task_options, [&] { progress.advance(); });
     progress.finish();
     const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     const double cpu = static_cast<double>(std::clock() - cpu0) / CLOCKS_PER_SEC;
@@ -217,6 +330,10 @@ int main(int argc, char** argv) {
     for (const DeviceZWidth& r : results) {
       boundaries += r.boundaries.size();
       for (const Boundary& b : r.boundaries) runs += b.runs.size();
+    }
+    for (const DeviceTaskZWidth& r : task_results) {
+      boundaries += r.boundaries.size();
+      for (const TaskBoundary& b : r.boundaries) runs += b.runs.size();
     }
     for (const DeviceZWidth& r : results) {
       if (!r.identification.responds) continue;
@@ -230,16 +347,25 @@ int main(int argc, char** argv) {
       }
       std::printf("\n");
     }
-    const std::string summary = summaryText(results, options);
+    for (const DeviceTaskZWidth& r : task_results)
+      if (r.note.empty())
+        std::printf("%-12s task: mass along n %.3g kg, b_n %.4g N s/m at %.0f Hz (hand b_h %.3g N s/m), force "
+                    "capacity along n %.3g N\n",
+                    r.name.c_str(), r.identification.mass, r.identification.damping, r.identification.frequency_hz,
+                    r.hand_damping, r.force_capacity);
+    std::string summary = joint_space ? summaryText(results, options) : std::string();
+    if (!task_results.empty()) summary += taskSummaryText(task_results);
     std::printf("%s", summary.c_str());
     std::printf("%zu boundaries, %zu runs; wall time %.1f s on %u threads, CPU %.1f s\n", boundaries, runs, wall,
                 threads ? threads : hardwareThreads(), cpu);
 
-    writeCsv(out, results, devices);
+    if (joint_space) writeCsv(out, results, devices);
+    if (!task_results.empty()) writeTaskCsv(out, task_results);
     tools::runPlotScript("zwidth.py", {out});
+    std::ofstream(out + "/summary.txt") << summary;
+    if (!joint_space) return tools::CommandLine::kAllPass;
     const ReproductionTable table = zwidthReproduction(results);
     table.writeCsv(out + "/reproduction.csv");
-    std::ofstream(out + "/summary.txt") << summary;
     std::printf("\n%s\n", table.format().c_str());
     return table.allPass() ? tools::CommandLine::kAllPass : tools::CommandLine::kRowsFail;
   } catch (const std::exception& e) {

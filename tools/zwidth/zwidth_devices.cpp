@@ -6,8 +6,13 @@
 
 #include "device_servo_renderers.hpp"
 #include "uhaptics/backends/board_catalog.hpp"
+#include "uhaptics/backends/planar_linkage_plant.hpp"
+#include "uhaptics/backends/tau_plant.hpp"
 #include "uhaptics/core/fault.hpp"
 #include "uhaptics/models/param_file.hpp"
+#include "uhaptics/models/planar_linkage_model.hpp"
+#include "uhaptics/models/tau_model.hpp"
+#include "uhaptics/renderers/tau_policy.hpp"
 
 namespace uhaptics {
 
@@ -47,6 +52,14 @@ double jointFriction(const ParamFile& file, const char* key, int joints, int joi
   return file.numbers(key, static_cast<std::size_t>(joints), 0.0, std::numeric_limits<double>::max())[static_cast<std::size_t>(joint)];
 }
 
+template <int N>
+std::unique_ptr<BoardPlant> userlessPlanarPlant(const std::string& path, const std::string& model) {
+  typename PlanarLinkagePlant<N>::Options options;
+  options.hand_stiffness = 0.0;  // no grip: the caller's force is the user
+  options.hand_damping = 0.0;
+  return std::make_unique<PlanarLinkagePlant<N>>(PlanarLinkageModel<N>::load(path, model), options);
+}
+
 }  // namespace
 
 experiments::ZWidthDevice zwidthDevice(const DeviceDefinition& device, const std::string& params_dir, int joint) {
@@ -80,6 +93,51 @@ experiments::ZWidthDevice zwidthDevice(const DeviceDefinition& device, const std
 std::vector<experiments::ZWidthDevice> registeredZWidthDevices(const std::string& params_dir, int joint) {
   std::vector<experiments::ZWidthDevice> devices;
   for (const DeviceDefinition* device : deviceDefinitions()) devices.push_back(zwidthDevice(*device, params_dir, joint));
+  return devices;
+}
+
+experiments::TaskZWidthDevice taskZWidthDevice(const DeviceDefinition& device, const std::string& params_dir) {
+  experiments::TaskZWidthDevice d;
+  d.name = device.name;
+  d.spec = boardSpec(device, params_dir);
+  d.normal = Vec3::UnitZ();
+  const std::string path = params_dir + "/" + device.params_file;
+  const ParamFile file = ParamFile::load(path);
+  const std::string model = file.text("device");
+  const int actuators = d.spec.descriptor.actuators;
+  if (model == "tau") {
+    const double board_period = 1.0 / d.spec.sample_rate_hz;
+    d.make_plant = [path, board_period](double period) -> std::unique_ptr<BoardPlant> {
+      TauBoardPlant::Options options;
+      options.hold_tool = false;  // as cTauDevice::makeSimulatedPlant: the scripted hand's force is the user
+      if (period < board_period * (1.0 - 1e-9)) options.step_period = period;
+      return std::make_unique<TauBoardPlant>(TauModel::load(path), options);
+    };
+    d.hand_damping = HandModel{}.damping;
+    d.renderers = {"spring", "lqr"};
+    d.native_rate_renderers = {"lqr"};
+  } else if (model == "rhi4" || model == "planar3") {
+    d.make_plant = [path, model, actuators](double) -> std::unique_ptr<BoardPlant> {
+      return actuators == 4 ? userlessPlanarPlant<4>(path, model) : userlessPlanarPlant<3>(path, model);
+    };
+    d.hand_damping = PlanarLinkagePlant<4>::Options{}.hand_damping;
+  } else {
+    d.skip_note = "the user is position-driven (the finger moves the device): no force-source user, no Z-width";
+    return d;
+  }
+  const DeviceDefinition* definition = &device;  // registrations live for the program
+  d.make_policy = [definition, params_dir](const std::string& renderer) {
+    std::unique_ptr<DevicePolicy> policy = makeDevicePolicy(*definition, params_dir);
+    if (auto* tau = dynamic_cast<TauPolicy*>(policy.get()))
+      tau->setWallMode(renderer == "lqr" ? TauPolicy::WallMode::kLqr : TauPolicy::WallMode::kSpring);
+    return policy;
+  };
+  return d;
+}
+
+std::vector<experiments::TaskZWidthDevice> registeredTaskZWidthDevices(const std::string& params_dir) {
+  std::vector<experiments::TaskZWidthDevice> devices;
+  for (const DeviceDefinition* device : deviceDefinitions()) devices.push_back(taskZWidthDevice(*device, params_dir));
   return devices;
 }
 

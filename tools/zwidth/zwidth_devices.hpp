@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "uhaptics/backends/device_definition.hpp"
+#include "uhaptics/experiments/task_zwidth.hpp"
 #include "uhaptics/experiments/zwidth.hpp"
 
 namespace uhaptics {
@@ -17,5 +18,14 @@ experiments::ZWidthDevice zwidthDevice(const DeviceDefinition& device, const std
 
 /// Every registered device, in registration order, the wall on joint `joint` of each.
 std::vector<experiments::ZWidthDevice> registeredZWidthDevices(const std::string& params_dir, int joint = 0);
+
+/// The device for the task-space harness (task_zwidth.hpp): the plant a CHAI3D "sim" session makes
+/// (no user of its own: cTauDevice's and cPlanarLinkageDevice's makeSimulatedPlant), its policy with
+/// the renderer forced (the TAU: "spring" or "lqr" wall mode), the wall's normal +z in the device
+/// frame (the user presses down: the TAU's table-top scenes, the planar devices' palpation axis, task
+/// y = device -z), and the hand damping of the device's default simulated user (the TAU's b_h, the
+/// planar grip's). The exoskeleton's user is position-driven: skip_note says so.
+experiments::TaskZWidthDevice taskZWidthDevice(const DeviceDefinition& device, const std::string& params_dir);
+std::vector<experiments::TaskZWidthDevice> registeredTaskZWidthDevices(const std::string& params_dir);
 
 }  // namespace uhaptics
