@@ -69,13 +69,14 @@ void writeTaskCsv(const std::string& out, const std::vector<DeviceTaskZWidth>& r
   std::ofstream csv(out + "/task_boundaries.csv");
   csv << std::setprecision(std::numeric_limits<double>::max_digits10);
   csv << "device,rate_hz,delay,renderer,k_max,bound,ratio,k_fail,below_range,above_range,b_n,hand_damping,"
-         "rendered_stiffness,runs\n";
+         "rendered_stiffness,k_stable,rendered_stable,energy_stable,runs\n";
   for (const DeviceTaskZWidth& r : results)
     for (const TaskBoundary& b : r.boundaries)
       csv << r.name << ',' << b.rate_hz << ',' << b.delay << ',' << b.renderer << ',' << b.k_max << ',' << b.k_colgate
           << ',' << (b.k_colgate > 0.0 ? b.k_max / b.k_colgate : std::nan("")) << ',' << b.k_fail << ','
           << (b.below_range ? 1 : 0) << ',' << (b.above_range ? 1 : 0) << ',' << b.b_n << ',' << r.hand_damping << ','
-          << b.rendered_stiffness << ',' << b.runs.size() << '\n';
+          << b.rendered_stiffness << ',' << b.k_stable << ',' << b.rendered_stable << ',' << b.energy_stable << ','
+          << b.runs.size() << '\n';
   if (!csv) throw Error(out + "/task_boundaries.csv: cannot write");
   // outcome: 0 passive, 1 active, 2 limit cycle, 3 divergent.
   std::ofstream runs(out + "/task_runs.csv");
@@ -103,22 +104,25 @@ std::string taskSummaryText(const std::vector<DeviceTaskZWidth>& results) {
   std::string out;
   appendf(out, "\nTask space: a wall at the tool, normal +z (device frame), CHAI3D's spring F = K p n through each "
                "device's policy; the user a force source with the hand's damping b_h on the tool.\n");
-  appendf(out, "%-12s %-7s %8s %5s %12s %12s %7s %10s %12s\n", "device", "wall", "rate Hz", "delay", "K_max N/m",
-          "2 b_n/T", "ratio", "b_n N s/m", "rendered N/m");
+  appendf(out, "%-12s %-7s %8s %5s %12s %12s %7s %10s %12s %12s %12s\n", "device", "wall", "rate Hz", "delay",
+          "K_max N/m", "2 b_n/T", "ratio", "b_n N s/m", "rendered N/m", "K_stable", "rendered");
   for (const DeviceTaskZWidth& r : results) {
     if (!r.note.empty()) {
       appendf(out, "%-12s  %s\n", r.name.c_str(), r.note.c_str());
       continue;
     }
     for (const TaskBoundary& b : r.boundaries)
-      appendf(out, "%-12s %-7s %8.0f %5d %11.4g%s %12.4g %7.3f %10.4g %12.4g\n", r.name.c_str(), b.renderer.c_str(),
-              b.rate_hz, b.delay, b.k_max, b.above_range ? "+" : b.below_range ? "-" : " ", b.k_colgate,
-              b.k_colgate > 0.0 ? b.k_max / b.k_colgate : std::nan(""), b.b_n, b.rendered_stiffness);
+      appendf(out, "%-12s %-7s %8.0f %5d %11.4g%s %12.4g %7.3f %10.4g %12.4g %12.4g %12.4g\n", r.name.c_str(),
+              b.renderer.c_str(), b.rate_hz, b.delay, b.k_max, b.above_range ? "+" : b.below_range ? "-" : " ",
+              b.k_colgate, b.k_colgate > 0.0 ? b.k_max / b.k_colgate : std::nan(""), b.b_n, b.rendered_stiffness,
+              b.k_stable, b.rendered_stable);
   }
   appendf(out, "b_n: damping along n identified with a sinusoidal force on the tool at the rate's contact frequency "
                "(hand b_h included); rendered: press force / mean sensed penetration at the end of the hold (the LQR "
                "wall's stiffness; about K for the spring); '+': passive to the search's ceiling; '-': nothing passive "
-               "down to its floor.\n");
+               "down to its floor. K_stable: the largest K tried below every bouncing or diverging run (it may be "
+               "active: the LQR wall pushes the tool back up to its plane against the user), bracketed within 2x. "
+               "The LQR wall is designed for the TAU's 1 kHz only.\n");
   appendf(out, "\nRecommended m_maxLinearStiffness [N/m] = %.2g x the spring's task K_max (delay 0):\n",
           kStiffnessMargin);
   std::vector<double> rates;

@@ -387,8 +387,18 @@ TaskBoundary findTaskBoundary(const TaskZWidthDevice& device, const std::string&
   }
   out.k_max = lo;
   out.k_fail = hi;
-  for (const TaskWallRun& run : out.runs)
+  double unstable = std::numeric_limits<double>::infinity();
+  for (const TaskWallRun& run : out.runs) {
     if (run.stiffness == lo) out.rendered_stiffness = run.rendered_stiffness;
+    if (run.outcome == WallOutcome::kLimitCycle || run.outcome == WallOutcome::kDivergent)
+      unstable = std::min(unstable, run.stiffness);
+  }
+  for (const TaskWallRun& run : out.runs)
+    if (run.stiffness < unstable && !(run.stiffness <= out.k_stable)) {
+      out.k_stable = run.stiffness;
+      out.rendered_stable = run.rendered_stiffness;
+      out.energy_stable = run.generated_energy;
+    }
   return out;
 }
 

@@ -29,6 +29,10 @@
 // ("spring", "lqr"). The LQR wall renders a plane of its own (read from the force: it holds the tool
 // whatever K the scene asks), so for it the search's K is the scene's stiffness, and the stiffness it
 // renders is reported: press force / penetration below the scene's plane over the end of the hold.
+// A position-control wall is not a spring: it brings the tool back up to its plane from the depth the
+// spring let it reach while the classifier probed, against the user's push, which the energy balance
+// counts as generated. So beside the strict (passive) K_max each boundary gives k_stable, the largest
+// K tried that neither bounced nor diverged (the search only brackets it: a factor up to 2).
 //
 // Units: m, N, N/m, N s/m, J. Not servo code: runs allocate and may throw.
 #include <functional>
@@ -123,6 +127,11 @@ struct TaskBoundary {
   double k_colgate = 0.0;  // 2 b_n / ((1 + 2 d) T)
   /// The K_max run's rendered stiffness (the LQR wall's; the spring's is about K).
   double rendered_stiffness = std::numeric_limits<double>::quiet_NaN();
+  /// The largest K run below every K that bounced or diverged (passive or active), its rendered
+  /// stiffness and generated energy [J]; NaN when none.
+  double k_stable = std::numeric_limits<double>::quiet_NaN();
+  double rendered_stable = std::numeric_limits<double>::quiet_NaN();
+  double energy_stable = std::numeric_limits<double>::quiet_NaN();
   std::vector<TaskWallRun> runs;
 };
 
