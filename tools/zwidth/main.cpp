@@ -63,6 +63,13 @@ __attribute__((format(printf, 2, 3))) void appendf(std::string& out, const char*
 // 2 %, and a lighter grip than the simulated hand's has less damping, so proportionally less K.
 constexpr double kStiffnessMargin = 0.8;
 
+// The spring's task K_max of a device at (rate, delay); NaN when not swept.
+double taskStiffness(const DeviceTaskZWidth& r, double rate, int delay) {
+  for (const TaskBoundary& b : r.boundaries)
+    if (b.rate_hz == rate && b.delay == delay && b.renderer == "spring") return b.k_max;
+  return std::nan("");
+}
+
 void writeTaskCsv(const std::string& out, const std::vector<DeviceTaskZWidth>& results) {
   // renderer: the device's own ("spring": J^T F) or the TAU's LQR wall; bound: 2 b_n / ((1 + 2 d) T);
   // above_range: passive up to the search's ceiling (k_max a lower bound).
@@ -92,11 +99,15 @@ void writeTaskCsv(const std::string& out, const std::vector<DeviceTaskZWidth>& r
              << run.hold_amplitude << ',' << run.hold_entries << ',' << run.final_amplitude << ','
              << run.final_entries << ',' << run.rendered_stiffness << '\n';
   if (!runs) throw Error(out + "/task_runs.csv: cannot write");
-  tools::CsvWriter stiffness(out + "/stiffness.csv", {"device", "rate_hz", "k_max_task", "recommended"});
+  // recommended: at delay 0 (the "sim" backend); the _delay1 pair for the board protocol's one period.
+  tools::CsvWriter stiffness(out + "/stiffness.csv", {"device", "rate_hz", "k_max_task", "recommended",
+                                                      "k_max_task_delay1", "recommended_delay1"});
   for (const DeviceTaskZWidth& r : results)
     for (const TaskBoundary& b : r.boundaries)
-      if (b.delay == 0 && b.renderer == "spring")
-        stiffness.row(r.name, {b.rate_hz, b.k_max, kStiffnessMargin * b.k_max});
+      if (b.delay == 0 && b.renderer == "spring") {
+        const double late = taskStiffness(r, b.rate_hz, 1);
+        stiffness.row(r.name, {b.rate_hz, b.k_max, kStiffnessMargin * b.k_max, late, kStiffnessMargin * late});
+      }
 }
 
 // The task-space rows of summary.txt.
@@ -117,32 +128,32 @@ std::string taskSummaryText(const std::vector<DeviceTaskZWidth>& results) {
               b.k_colgate, b.k_colgate > 0.0 ? b.k_max / b.k_colgate : std::nan(""), b.b_n, b.rendered_stiffness,
               b.k_stable, b.rendered_stable);
   }
+  // appendf's buffer holds 512 characters: one sentence a call.
   appendf(out, "b_n: damping along n identified with a sinusoidal force on the tool at the rate's contact frequency "
-               "(hand b_h included); rendered: press force / mean sensed penetration at the end of the hold (the LQR "
-               "wall's stiffness; about K for the spring); '+': passive to the search's ceiling; '-': nothing passive "
-               "down to its floor. K_stable: the largest K tried below every bouncing or diverging run (it may be "
-               "active: the LQR wall pushes the tool back up to its plane against the user), bracketed within 2x. "
-               "The LQR wall is designed for the TAU's 1 kHz only.\n");
-  appendf(out, "\nRecommended m_maxLinearStiffness [N/m] = %.2g x the spring's task K_max (delay 0):\n",
-          kStiffnessMargin);
+               "(hand b_h included); 2 b_n/T: with a delay of d periods 2 b_n / ((1 + 2 d) T). ");
+  appendf(out, "rendered: press force / mean sensed penetration at the end of the hold (the LQR wall's stiffness; "
+               "about K for the spring); '+': passive to the search's ceiling; '-': nothing passive down to its "
+               "floor. ");
+  appendf(out, "K_stable: the largest K tried below every bouncing or diverging run (it may be active: the LQR wall "
+               "pushes the tool back up to its plane against the user), bracketed within 2x. The LQR wall is "
+               "designed for the TAU's 1 kHz only.\n");
   std::vector<double> rates;
   for (const DeviceTaskZWidth& r : results)
     for (const TaskBoundary& b : r.boundaries)
       if (std::find(rates.begin(), rates.end(), b.rate_hz) == rates.end()) rates.push_back(b.rate_hz);
   std::sort(rates.begin(), rates.end());
-  appendf(out, "%-12s", "device");
-  for (const double rate : rates) appendf(out, " %9.0f Hz", rate);
-  appendf(out, "\n");
-  for (const DeviceTaskZWidth& r : results) {
-    if (!r.note.empty()) continue;
-    appendf(out, "%-12s", r.name.c_str());
-    for (const double rate : rates) {
-      double k = std::nan("");
-      for (const TaskBoundary& b : r.boundaries)
-        if (b.rate_hz == rate && b.delay == 0 && b.renderer == "spring") k = b.k_max;
-      appendf(out, " %12.4g", kStiffnessMargin * k);
-    }
+  for (const int delay : {0, 1}) {
+    appendf(out, "\nRecommended m_maxLinearStiffness [N/m] = %.2g x the spring's task K_max at delay %d (%s):\n",
+            kStiffnessMargin, delay, delay == 0 ? "the sim backend" : "the board protocol's one period");
+    appendf(out, "%-12s", "device");
+    for (const double rate : rates) appendf(out, " %9.0f Hz", rate);
     appendf(out, "\n");
+    for (const DeviceTaskZWidth& r : results) {
+      if (!r.note.empty()) continue;
+      appendf(out, "%-12s", r.name.c_str());
+      for (const double rate : rates) appendf(out, " %12.4g", kStiffnessMargin * taskStiffness(r, rate, delay));
+      appendf(out, "\n");
+    }
   }
   return out;
 }
@@ -315,10 +326,17 @@ int main(int argc, char** argv) {
     TaskZWidthOptions task_options;
     task_options.rates_hz = rates;
     task_options.threads = threads;
+    // The task wall at delay 0 (the simulation's) and 1 (the board protocol's), within --max-delay.
+    task_options.delays = max_delay >= 1 ? std::vector<int>{0, 1} : std::vector<int>{0};
 
     std::size_t cases = joint_space ? zwidthCases(options, 1.0).size() * devices.size() : 0;
     for (const TaskZWidthDevice& d : task_devices)
-      if (d.skip_note.empty()) cases += d.renderers.size() * task_options.rates_hz.size() * task_options.delays.size();
+      if (d.skip_note.empty())
+        for (const std::string& renderer : d.renderers) {
+          const bool native = std::find(d.native_rate_renderers.begin(), d.native_rate_renderers.end(), renderer) !=
+                              d.native_rate_renderers.end();
+          cases += (native ? 1 : task_options.rates_hz.size()) * task_options.delays.size();
+        }
     tools::Progress progress("zwidth", cases);
     const auto t0 = std::chrono::steady_clock::now();
     const std::clock_t cpu0 = std::clock();
