@@ -101,7 +101,7 @@ def task_figure(name, rows, out):
     ax.set_ylabel("wall stiffness at the tool (N/m)")
     ax.set_title(f"{name}: task-space Z-width, delay 0")
     if ax.get_legend_handles_labels()[0]:
-        ax.legend(fontsize=7)
+        ax.legend(fontsize=7, loc="lower right")
     save(fig, os.path.join(out, f"zwidth_task_{name}.png"))
     plt.close(fig)
 
