@@ -1,6 +1,9 @@
 #include "uhaptics/backends/board_catalog.hpp"
 
+#include <algorithm>
 #include <cmath>
+#include <string>
+#include <vector>
 
 #include "uhaptics/core/fault.hpp"
 #include "uhaptics/models/param_file.hpp"
@@ -31,6 +34,16 @@ BoardSpec boardSpecFromParams(const DeviceDefinition& device, const ParamFile& f
   // The range the protocol's boards accept (PROTOCOL.md, CONFIGURE).
   b.board_watchdog_us = static_cast<std::uint32_t>(file.integer("usb/board_watchdog_us", 1000, 1000000));
   device.describe_board(device, file, b);
+  // A file with a stability section rates both delays; one without rates nothing.
+  const std::string stability = ParamFile::kStabilitySection;
+  if (file.has(stability)) {
+    const auto rated = [&file](const std::string& key, RatedStiffness& out) {
+      const std::vector<double> v = file.numbers(key, out.size(), 1.0, 1e7);
+      std::copy(v.begin(), v.end(), out.begin());
+    };
+    rated(stability + "/max_linear_stiffness", b.rated_stiffness);
+    rated(stability + "/max_linear_stiffness_delayed", b.rated_stiffness_delayed);
+  }
   // The model and the board have read their parts; anything left is a key nobody knows.
   file.rejectUnreadKeys();
   return b;

@@ -81,7 +81,7 @@ PlanarLinkageModel<N> PlanarLinkageModel<N>::fromParams(const ParamFile& f, cons
     p.joint_limits.lower = f.vector<N>("limits/joint_limits/lower", -10.0, 10.0);
     p.joint_limits.upper = f.vector<N>("limits/joint_limits/upper", -10.0, 10.0);
   }
-  f.rejectUnreadKeys({ParamFile::kBoardSection});
+  f.rejectUnreadKeys({ParamFile::kBoardSection, ParamFile::kStabilitySection});
   try {
     return PlanarLinkageModel(std::move(p));
   } catch (const Error& e) {

@@ -70,7 +70,7 @@ ExoFingerModel ExoFingerModel::fromParams(const ParamFile& p) {
   m.board_rate_hz_ = p.number("rates/board_rate_hz", 1.0, 100000.0);
   m.host_rate_hz_ = p.number("rates/host_rate_hz", 1.0, 100000.0);
   m.force_loop_tau_ = p.number("rates/force_loop_time_constant", 0.0, 1.0);
-  p.rejectUnreadKeys({ParamFile::kBoardSection});
+  p.rejectUnreadKeys({ParamFile::kBoardSection, ParamFile::kStabilitySection});
 
   // Assembly modes of the forward closures: the ones that reproduce the middle of the range.
   const TaskVector mid = 0.5 * (m.task_lower_ + m.task_upper_);

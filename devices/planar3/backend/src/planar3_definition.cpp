@@ -21,6 +21,8 @@ DeviceDefinition definition() {
   d.params_file = "planar3.json";
   d.describe_board = &describePlanarLinkageBoard<3, kModel>;
   d.make_plant = &makePlanarLinkagePlant<3, kModel>;
+  d.make_userless_plant = &makeUserlessPlanarLinkagePlant<3, kModel>;
+  d.hand_damping = PlanarLinkagePlant<3>::Options{}.hand_damping;
   return d;
 }
 

@@ -21,6 +21,8 @@ DeviceDefinition definition() {
   d.params_file = "rhi4.json";
   d.describe_board = &describePlanarLinkageBoard<4, kModel>;
   d.make_plant = &makePlanarLinkagePlant<4, kModel>;
+  d.make_userless_plant = &makeUserlessPlanarLinkagePlant<4, kModel>;
+  d.hand_damping = PlanarLinkagePlant<4>::Options{}.hand_damping;
   return d;
 }
 

@@ -31,6 +31,13 @@ DeviceDefinition definition() {
     options.step_period = step_period;
     return std::make_unique<TauBoardPlant>(TauModel::load(path), options);
   };
+  d.make_userless_plant = [](const std::string& path, double step_period) -> std::unique_ptr<BoardPlant> {
+    TauBoardPlant::Options options;
+    options.hold_tool = false;
+    options.step_period = step_period;
+    return std::make_unique<TauBoardPlant>(TauModel::load(path), options);
+  };
+  d.hand_damping = HandModel{}.damping;
   return d;
 }
 

@@ -62,7 +62,7 @@ TauModel TauModel::fromParams(const ParamFile& p) {
   m.rod_mass_ = p.vector<6>("rods/mass", 0.0, 10.0);
   m.platform_masses_.push_back({p.number("platform/mass", 1e-3, 10.0), p.vector<3>("platform/com", -0.2, 0.2)});
   m.platform_masses_.push_back({p.number("handle/mass", 0.0, 10.0), p.vector<3>("handle/com", -0.3, 0.3)});
-  p.rejectUnreadKeys({ParamFile::kBoardSection});
+  p.rejectUnreadKeys({ParamFile::kBoardSection, ParamFile::kStabilitySection});
   try {
     m.finalize();
   } catch (const Error& e) {

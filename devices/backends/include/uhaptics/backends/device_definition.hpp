@@ -6,6 +6,7 @@
 // docs/adding-a-device.md walks through adding one.
 #include <array>
 #include <cstdint>
+#include <limits>
 #include <memory>
 #include <string>
 #include <vector>
@@ -17,6 +18,15 @@ namespace uhaptics {
 
 class ParamFile;
 
+/// The servo rates a device's rated wall stiffness is stated for (those the Z-width harness sweeps).
+inline constexpr std::array<double, 4> kRatedServoRatesHz = {500.0, 1000.0, 2000.0, 4000.0};
+/// A stiffness per kRatedServoRatesHz entry [N/m]; kUnrated: none stated.
+using RatedStiffness = std::array<double, kRatedServoRatesHz.size()>;
+inline constexpr RatedStiffness kUnrated = {std::numeric_limits<double>::quiet_NaN(),
+                                            std::numeric_limits<double>::quiet_NaN(),
+                                            std::numeric_limits<double>::quiet_NaN(),
+                                            std::numeric_limits<double>::quiet_NaN()};
+
 struct BoardSpec {
   DeviceDescriptor descriptor;
   double servo_rate_hz = 0.0;         // host <-> board exchange rate (the exoskeleton's USB: 500 Hz)
@@ -27,6 +37,13 @@ struct BoardSpec {
   /// 2 pi / 4096); 0 for a sensor the simulation and the board treat as ideal. The rate estimator's
   /// noise bound (JointRateEstimator::setResolution).
   std::array<double, wire::kMaxChannels> position_resolution{};
+  /// The stiffest spring wall at the tool [N/m] (CHAI3D's m_maxLinearStiffness) the device renders
+  /// passively at each of kRatedServoRatesHz, with the command acting in the period it is computed
+  /// from (the sim backend) and one period later (a board over the protocol): the parameter file's
+  /// "stability" section, 0.8 of the boundary uhaptics-zwidth measures with the device's own policy
+  /// (docs/stability.md). NaN where the file rates none (the exoskeleton's user is position-driven).
+  RatedStiffness rated_stiffness = kUnrated;
+  RatedStiffness rated_stiffness_delayed = kUnrated;
 };
 
 /// The paper whose method the device reproduces, written once here: the reproduction rows name it by
@@ -74,6 +91,14 @@ struct DeviceDefinition {
   /// at 2-4 kHz); nullptr where make_plant's plant already resolves any period (its own step is
   /// finer) or has no step to change. Throws Error for a step the simulation refuses.
   std::unique_ptr<BoardPlant> (*make_plant_stepped)(const std::string& params_path, double step_period) = nullptr;
+  /// The simulated device without a user of its own, for a caller that simulates the user on the end
+  /// effector (BoardPlant::setUserForce: the task-space Z-width harness), integrating in steps of
+  /// step_period [s] (0: its board's sampling period). nullptr where the device's user is
+  /// position-driven (the exoskeleton's finger takes no force).
+  std::unique_ptr<BoardPlant> (*make_userless_plant)(const std::string& params_path, double step_period) = nullptr;
+  /// The viscous damping [N s/m] of the hand make_plant's user holds the end effector with: what a
+  /// caller that simulates the user in its place puts on the end effector.
+  double hand_damping = 0.0;
 };
 
 /// The registered devices, in registration order (validated once: names and codes unique).

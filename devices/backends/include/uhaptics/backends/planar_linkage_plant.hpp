@@ -64,6 +64,8 @@ class PlanarLinkagePlant final : public HeldTorquePlant<N> {
 /// itself kModel (its "device" field):
 ///   d.describe_board = &describePlanarLinkageBoard<4, kModel>;
 ///   d.make_plant = &makePlanarLinkagePlant<4, kModel>;
+///   d.make_userless_plant = &makeUserlessPlanarLinkagePlant<4, kModel>;
+///   d.hand_damping = PlanarLinkagePlant<4>::Options{}.hand_damping;
 template <int N, const char* kModel>
 void describePlanarLinkageBoard(const DeviceDefinition& self, const ParamFile& file, BoardSpec& spec) {
   const PlanarLinkageModel<N> model = PlanarLinkageModel<N>::fromParams(file, kModel);
@@ -74,6 +76,16 @@ template <int N, const char* kModel>
 std::unique_ptr<BoardPlant> makePlanarLinkagePlant(const std::string& params_path) {
   return std::make_unique<PlanarLinkagePlant<N>>(PlanarLinkageModel<N>::load(params_path, kModel),
                                                  typename PlanarLinkagePlant<N>::Options{});
+}
+/// Without the grip: the caller's setUserForce is the user. Its 0.1 ms substeps resolve any servo
+/// period the harness runs, so step_period changes nothing.
+template <int N, const char* kModel>
+std::unique_ptr<BoardPlant> makeUserlessPlanarLinkagePlant(const std::string& params_path, double step_period) {
+  (void)step_period;
+  typename PlanarLinkagePlant<N>::Options options;
+  options.hand_stiffness = 0.0;
+  options.hand_damping = 0.0;
+  return std::make_unique<PlanarLinkagePlant<N>>(PlanarLinkageModel<N>::load(params_path, kModel), options);
 }
 
 }  // namespace uhaptics

@@ -38,6 +38,9 @@ class ParamFile {
   /// The section of a device's file that the board layer reads (devices/protocol, devices/backends);
   /// a model loader leaves it to them.
   static constexpr const char* kBoardSection = "usb";
+  /// The section stating what the device renders stably (its rated wall stiffness), which the board
+  /// layer reads into BoardSpec; a model loader leaves it too.
+  static constexpr const char* kStabilitySection = "stability";
 
   /// Reads and parses a file; throws Error if it is missing, a folder, unreadable or not valid JSON.
   static ParamFile load(const std::string& path);
