@@ -88,3 +88,43 @@ TEST_CASE("task Z-width: the exoskeleton is skipped with the reason, refused cas
   CHECK_THROWS(runTaskWall(mass, "spring", 1000.0, 0, -1.0, TaskScript{}));
   CHECK_THROWS(sweepTaskZWidth({mass}, options({})));
 }
+
+TEST_CASE("task Z-width: the rows check the bound where it applies and a rated stiffness against the boundary") {
+  // Every shipped rating lies inside its device's passive region with the 0.8 margin.
+  const TaskZWidthDevice tau = uhaptics::taskZWidthDevice(findDevice("tau"), UHAPTICS_PARAMS_DIR);
+  REQUIRE(std::isfinite(tau.spec.rated_stiffness[1]));
+  for (std::size_t k = 1; k < kRatedServoRatesHz.size(); ++k) {
+    CHECK(tau.spec.rated_stiffness[k] > tau.spec.rated_stiffness[k - 1]);  // a faster loop, a stiffer wall
+    CHECK(tau.spec.rated_stiffness_delayed[k] < tau.spec.rated_stiffness[k]);  // a late command, a softer one
+  }
+  CHECK_FALSE(std::isfinite(uhaptics::taskZWidthDevice(findDevice("exo"), UHAPTICS_PARAMS_DIR).spec.rated_stiffness[1]));
+
+  DeviceTaskZWidth r;
+  r.name = "tau";
+  r.identification.mass = 0.2;
+  for (std::size_t k = 0; k < kRatedServoRatesHz.size(); ++k)
+    for (const int delay : {0, 1}) {
+      TaskBoundary b;
+      b.renderer = "spring";
+      b.rate_hz = kRatedServoRatesHz[k];
+      b.delay = delay;
+      b.k_colgate = 1.25 * (delay == 0 ? tau.spec.rated_stiffness[k] : tau.spec.rated_stiffness_delayed[k]);
+      b.k_max = b.k_colgate;
+      r.boundaries.push_back(b);
+    }
+  ReproductionTable table = taskZWidthReproduction({tau}, {r});
+  REQUIRE(table.rows().size() == 4);  // the bound at 0.5 and 1 kHz, the rating at delays 0 and 1
+  CHECK(table.allPass());
+  r.boundaries[3].k_max = 0.9 * tau.spec.rated_stiffness_delayed[1];  // the device got less stable at 1 kHz, delay 1
+  table = taskZWidthReproduction({tau}, {r});
+  REQUIRE(table.rows().size() == 4);
+  CHECK(table.rows()[0].pass);
+  CHECK(table.rows()[1].pass);
+  CHECK(table.rows()[2].pass);
+  CHECK_FALSE(table.rows()[3].pass);
+  r.boundaries[3].k_max = 4.0 * tau.spec.rated_stiffness_delayed[1];  // a rating far below the boundary is not derived from it
+  CHECK_FALSE(taskZWidthReproduction({tau}, {r}).allPass());
+  TaskZWidthDevice with_friction = tau;  // Coulomb friction: the viscous bound does not describe it
+  with_friction.coulomb_friction = true;
+  CHECK(taskZWidthReproduction({with_friction}, {r}).rows().size() == 2);
+}

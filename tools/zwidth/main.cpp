@@ -385,8 +385,11 @@ int main(int argc, char** argv) {
     if (!task_results.empty()) writeTaskCsv(out, task_results);
     tools::runPlotScript("zwidth.py", {out});
     std::ofstream(out + "/summary.txt") << summary;
-    if (!joint_space) return tools::CommandLine::kAllPass;
-    const ReproductionTable table = zwidthReproduction(results);
+    ReproductionTable table = joint_space ? zwidthReproduction(results) : ReproductionTable{};
+    if (!task_results.empty()) {
+      const ReproductionTable task_table = taskZWidthReproduction(task_devices, task_results);
+      for (const ReproductionRow& row : task_table.rows()) table.add(row);
+    }
     table.writeCsv(out + "/reproduction.csv");
     std::printf("\n%s\n", table.format().c_str());
     return table.allPass() ? tools::CommandLine::kAllPass : tools::CommandLine::kRowsFail;

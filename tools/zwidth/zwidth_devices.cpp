@@ -6,12 +6,8 @@
 
 #include "device_servo_renderers.hpp"
 #include "uhaptics/backends/board_catalog.hpp"
-#include "uhaptics/backends/planar_linkage_plant.hpp"
-#include "uhaptics/backends/tau_plant.hpp"
 #include "uhaptics/core/fault.hpp"
 #include "uhaptics/models/param_file.hpp"
-#include "uhaptics/models/planar_linkage_model.hpp"
-#include "uhaptics/models/tau_model.hpp"
 #include "uhaptics/renderers/tau_policy.hpp"
 
 namespace uhaptics {
@@ -50,14 +46,6 @@ class PolicyFreeSpace final : public experiments::FreeSpaceControl {
 double jointFriction(const ParamFile& file, const char* key, int joints, int joint) {
   if (!file.has(key)) return std::numeric_limits<double>::quiet_NaN();
   return file.numbers(key, static_cast<std::size_t>(joints), 0.0, std::numeric_limits<double>::max())[static_cast<std::size_t>(joint)];
-}
-
-template <int N>
-std::unique_ptr<BoardPlant> userlessPlanarPlant(const std::string& path, const std::string& model) {
-  typename PlanarLinkagePlant<N>::Options options;
-  options.hand_stiffness = 0.0;  // no grip: the caller's force is the user
-  options.hand_damping = 0.0;
-  return std::make_unique<PlanarLinkagePlant<N>>(PlanarLinkageModel<N>::load(path, model), options);
 }
 
 }  // namespace
@@ -101,29 +89,26 @@ experiments::TaskZWidthDevice taskZWidthDevice(const DeviceDefinition& device, c
   d.name = device.name;
   d.spec = boardSpec(device, params_dir);
   d.normal = Vec3::UnitZ();
-  const std::string path = params_dir + "/" + device.params_file;
-  const ParamFile file = ParamFile::load(path);
-  const std::string model = file.text("device");
-  const int actuators = d.spec.descriptor.actuators;
-  if (model == "tau") {
-    const double board_period = 1.0 / d.spec.sample_rate_hz;
-    d.make_plant = [path, board_period](double period) -> std::unique_ptr<BoardPlant> {
-      TauBoardPlant::Options options;
-      options.hold_tool = false;  // as cTauDevice::makeSimulatedPlant: the scripted hand's force is the user
-      if (period < board_period * (1.0 - 1e-9)) options.step_period = period;
-      return std::make_unique<TauBoardPlant>(TauModel::load(path), options);
-    };
-    d.hand_damping = HandModel{}.damping;
-    d.renderers = {"spring", "lqr"};
-    d.native_rate_renderers = {"lqr"};
-  } else if (model == "rhi4" || model == "planar3") {
-    d.make_plant = [path, model, actuators](double) -> std::unique_ptr<BoardPlant> {
-      return actuators == 4 ? userlessPlanarPlant<4>(path, model) : userlessPlanarPlant<3>(path, model);
-    };
-    d.hand_damping = PlanarLinkagePlant<4>::Options{}.hand_damping;
-  } else {
+  if (!device.make_userless_plant) {
     d.skip_note = "the user is position-driven (the finger moves the device): no force-source user, no Z-width";
     return d;
+  }
+  const std::string path = params_dir + "/" + device.params_file;
+  // The plant in its board's steps where they resolve the loop's period, in the loop's otherwise.
+  const double board_period = 1.0 / d.spec.sample_rate_hz;
+  d.make_plant = [make = device.make_userless_plant, path, board_period](double period) {
+    return make(path, period < board_period * (1.0 - 1e-9) ? period : 0.0);
+  };
+  d.hand_damping = device.hand_damping;
+  const ParamFile file = ParamFile::load(path);
+  const int joints = d.spec.descriptor.joints;
+  for (int j = 0; j < joints; ++j)
+    if (jointFriction(file, "friction/coulomb", joints, j) > 0.0) d.coulomb_friction = true;
+  // A device whose policy can render with the LQR wall (paper 001's) is measured with both walls;
+  // the LQR wall is designed for its model's servo period only.
+  if (dynamic_cast<TauPolicy*>(makeDevicePolicy(device, params_dir).get())) {
+    d.renderers = {"spring", "lqr"};
+    d.native_rate_renderers = {"lqr"};
   }
   const DeviceDefinition* definition = &device;  // registrations live for the program
   d.make_policy = [definition, params_dir](const std::string& renderer) {

@@ -4,6 +4,8 @@
 #include <array>
 #include <cmath>
 #include <cstdint>
+#include <cstdio>
+#include <limits>
 #include <utility>
 
 #include "uhaptics/backends/joint_io.hpp"
@@ -514,6 +516,51 @@ class PointMassPolicy final : public DevicePolicy {
 };
 
 }  // namespace
+
+ReproductionTable taskZWidthReproduction(const std::vector<TaskZWidthDevice>& devices,
+                                         const std::vector<DeviceTaskZWidth>& results) {
+  if (devices.size() != results.size()) throw Error("task Z-width: one result per device expected");
+  ReproductionTable table;
+  char quantity[200];
+  for (std::size_t i = 0; i < devices.size(); ++i) {
+    const TaskZWidthDevice& device = devices[i];
+    const DeviceTaskZWidth& r = results[i];
+    if (!r.note.empty()) continue;
+    const bool bound_applies = !device.coulomb_friction && r.identification.mass > 0.0;
+    for (const TaskBoundary& b : r.boundaries) {
+      if (!bound_applies || b.renderer != "spring" || b.delay != 0 || b.rate_hz > 1000.0 || !(b.k_colgate > 0.0))
+        continue;
+      std::snprintf(quantity, sizeof quantity, "%s at the tool, %g kHz: spring wall's K_max / (2 b_n / T)",
+                    r.name.c_str(), b.rate_hz / 1000.0);
+      const double ratio = b.above_range ? std::numeric_limits<double>::infinity() : b.k_max / b.k_colgate;
+      table.add({kStabilityRows, quantity, 1.0, ratio, "within 10 % of Colgate-Brown", false, "", {},
+                 Accepted::within(1.0, 0.10)});
+    }
+    for (const int delay : {0, 1}) {
+      const RatedStiffness& rated = delay == 0 ? device.spec.rated_stiffness : device.spec.rated_stiffness_delayed;
+      // The ratio farthest from the interval's centre: too close to the boundary or too far below it.
+      double worst = 0.75;
+      bool any = false;
+      for (std::size_t k = 0; k < rated.size(); ++k) {
+        if (!std::isfinite(rated[k])) continue;
+        for (const TaskBoundary& b : r.boundaries)
+          if (b.renderer == "spring" && b.delay == delay && b.rate_hz == kRatedServoRatesHz[k]) {
+            any = true;
+            // A boundary not found (NaN) fails the row, as it should.
+            const double ratio = std::isfinite(b.k_max) ? rated[k] / b.k_max : std::nan("");
+            if (!std::isnan(worst) && !(std::abs(ratio - 0.75) <= std::abs(worst - 0.75))) worst = ratio;
+          }
+      }
+      if (!any) continue;
+      std::snprintf(quantity, sizeof quantity,
+                    "%s: rated m_maxLinearStiffness / measured K_max at the tool, worst of 0.5-4 kHz, delay %d",
+                    r.name.c_str(), delay);
+      table.add({kStabilityRows, quantity, 0.8, worst, "within [0.5, 1]: inside the passive region", false, "", {},
+                 Accepted::within(0.75, 0.25)});
+    }
+  }
+  return table;
+}
 
 TaskZWidthDevice pointMassTaskDevice(double mass, double damping) {
   if (!(mass > 0.0) || !(damping > 0.0) || !std::isfinite(mass) || !std::isfinite(damping))

@@ -43,6 +43,7 @@
 
 #include "uhaptics/backends/board_plant.hpp"
 #include "uhaptics/backends/device_definition.hpp"
+#include "uhaptics/experiments/reproduction.hpp"
 #include "uhaptics/experiments/zwidth.hpp"
 #include "uhaptics/renderers/device_policy.hpp"
 
@@ -69,6 +70,9 @@ struct TaskZWidthDevice {
   double hand_damping = 0.0;
   /// Empty: measured. Otherwise why there is nothing to measure (a position-driven user).
   std::string skip_note;
+  /// The plant has Coulomb friction: it dissipates in every ringing cycle and raises the boundary
+  /// above the viscous bound, which then does not describe it (no bound row).
+  bool coulomb_friction = false;
 };
 
 /// The press: a smooth ramp to (1 - kick_fraction) of the press force from the tool at rest on the
@@ -182,6 +186,19 @@ TaskBoundary findTaskBoundary(const TaskZWidthDevice& device, const std::string&
 std::vector<DeviceTaskZWidth> sweepTaskZWidth(const std::vector<TaskZWidthDevice>& devices,
                                               const TaskZWidthOptions& options,
                                               const std::function<void()>& on_boundary = {});
+
+/// The rows the task sweep adds to the reproduction report (paper column kStabilityRows):
+///  - the spring's K_max over 2 b_n / T within 10 % at 0.5 and 1 kHz and delay 0, on every device
+///    whose plant the viscous bound describes (mass-like along n, b_n > 0, no Coulomb friction). At
+///    2 and 4 kHz the ratio is reported, not checked: the contact mode moves into the TAU's encoder
+///    quantization and above the planar arm's link modes (docs/stability.md);
+///  - on every device whose specification rates its stiffness (BoardSpec::rated_stiffness, the
+///    parameter file's "stability" section), the worst rated / measured K_max over the rates, per
+///    delay (0 and 1), within [0.5, 1]: the rating lies inside the passive region and is derived
+///    from it, not guessed far below it.
+/// devices and results in the same order (sweepTaskZWidth's).
+ReproductionTable taskZWidthReproduction(const std::vector<TaskZWidthDevice>& devices,
+                                         const std::vector<DeviceTaskZWidth>& results);
 
 /// A 1-DoF point mass with viscous damping along device z (m x'' + b x' = F_user + F_actuator,
 /// its "policy" J^T F = F), ideal sensor: the closed-form check, K_max = 2 b / T.
