@@ -19,8 +19,11 @@ namespace {
 
 using zwidth_detail::kPi;
 using zwidth_detail::raisedCosine;
+using zwidth_detail::searchStiffness;
+using zwidth_detail::StiffnessBracket;
 using zwidth_detail::ticksFor;
-using TaskChannels = std::array<double, wire::kMaxChannels>;
+using TaskChannels = zwidth_detail::Channels;
+using zwidth_detail::HardwarePath;
 
 // Identification: the sinusoidal force's amplitude [N], its smooth onset, the whole cycles measured.
 constexpr double kTaskIdForce = 1.0;
@@ -40,15 +43,11 @@ class TaskHarness {
       : device_(device),
         plant_(device.make_plant ? device.make_plant(period) : nullptr),
         policy_(device.make_policy ? device.make_policy(renderer) : nullptr),
-        period_(period),
-        delay_(delay),
-        joints_(device.spec.descriptor.joints),
-        actuators_(device.spec.descriptor.actuators) {
+        path_(device.spec, period, delay) {
     if (!plant_ || !policy_) throw Error("task Z-width: device '" + device.name + "' has no plant or no policy");
-    if (plant_->jointCount() != joints_ || plant_->actuatorCount() != actuators_)
+    if (plant_->jointCount() != device.spec.descriptor.joints ||
+        plant_->actuatorCount() != device.spec.descriptor.actuators)
       throw Error("task Z-width: device '" + device.name + "': the plant's joint or actuator count differs from its spec");
-    rate_.setResolution(device.spec.position_resolution.data(), joints_);
-    rate_.reset();
     policy_->reset(delay);
     const Vec3 n = policy_->deviceToModelForce(device.normal);
     normal_model_ = n.norm() > 0.0 ? Vec3(n / n.norm()) : n;
@@ -56,15 +55,8 @@ class TaskHarness {
 
   // Reads the plant and senses through the policy; false when a reading is not finite.
   bool sense() noexcept {
-    plant_->readJoints(raw_.data());
-    for (int i = 0; i < joints_; ++i) {
-      const double step = device_.spec.position_resolution[i];
-      q_[i] = step > 0.0 ? std::round(raw_[i] / step) * step : raw_[i];
-      if (!std::isfinite(q_[i])) return false;
-    }
-    const auto sample_us = static_cast<std::uint32_t>(std::llround(static_cast<double>(tick_) * period_ * 1e6));
-    rate_.update(q_.data(), joints_, sample_us, rates_.data());
-    policy_->sense(SensedJoints{q_.data(), rates_.data(), tick_ == 0}, state_);
+    if (!path_.read(*plant_)) return false;
+    policy_->sense(SensedJoints{path_.q().data(), path_.rates().data(), path_.tick() == 0}, state_);
     if (!plant_->readUserPoint(point_, velocity_)) return false;
     return state_.position.allFinite() && point_.allFinite() && velocity_.allFinite();
   }
@@ -75,22 +67,14 @@ class TaskHarness {
     SceneInput input;
     input.force = scene_force;
     input.seen_position = state_.position;
-    input.dt = period_;
-    input.time = static_cast<double>(tick_) * period_;
+    input.dt = path_.period();
+    input.time = static_cast<double>(path_.tick()) * path_.period();
     TaskChannels command{};
     if (policy_->render(input, command.data()) != Fault::kNone) command.fill(0.0);
-    for (int a = 0; a < actuators_; ++a) {
-      const double limit = device_.spec.descriptor.effort_limit[a];
-      command[a] = std::isfinite(command[a]) ? std::clamp(command[a], -limit, limit) : 0.0;
-    }
-    const auto slot = [](long tick) { return static_cast<std::size_t>(tick % (kMaxZWidthDelay + 1)); };
-    pending_[slot(tick_)] = command;
-    TaskChannels applied{};
-    if (tick_ >= delay_) applied = pending_[slot(tick_ - delay_)];
+    const TaskChannels applied = path_.command(command);
     plant_->applyCommand(applied.data());
     plant_->setUserForce(user_force);
-    plant_->advance(period_);
-    ++tick_;
+    plant_->advance(path_.period());
     return plant_->lastFault() == Fault::kNone;
   }
 
@@ -99,7 +83,7 @@ class TaskHarness {
     SceneInput input;
     input.force = scene_force;
     input.seen_position = state_.position;
-    input.dt = period_;
+    input.dt = path_.period();
     efforts.fill(0.0);
     return policy_->render(input, efforts.data()) == Fault::kNone;
   }
@@ -115,15 +99,9 @@ class TaskHarness {
   const TaskZWidthDevice& device_;
   std::unique_ptr<BoardPlant> plant_;
   std::unique_ptr<DevicePolicy> policy_;
-  double period_;
-  int delay_;
-  int joints_, actuators_;
-  JointRateEstimator rate_;
-  TaskChannels raw_{}, q_{}, rates_{};
+  HardwarePath path_;
   SensedState state_;
   Vec3 point_ = Vec3::Zero(), velocity_ = Vec3::Zero(), normal_model_ = Vec3::UnitZ();
-  std::array<TaskChannels, kMaxZWidthDelay + 1> pending_{};
-  long tick_ = 0;
 };
 
 void checkCase(double rate_hz, int delay) {
@@ -364,34 +342,14 @@ TaskBoundary findTaskBoundary(const TaskZWidthDevice& device, const std::string&
     return out.runs.back().outcome == WallOutcome::kPassive;
   };
   const double k0 = start_k > 0.0 && std::isfinite(start_k) ? start_k : 100.0;
-  double lo = std::numeric_limits<double>::quiet_NaN(), hi = lo;
-  if (passive(k0)) {
-    lo = k0;
-    for (int s = 0; s < options.max_bracket_steps && std::isnan(hi); ++s) {
-      if (passive(4.0 * lo)) lo *= 4.0;
-      else hi = 4.0 * lo;
-    }
-    out.above_range = std::isnan(hi);
-  } else {
-    hi = k0;
-    for (int s = 0; s < options.max_bracket_steps && std::isnan(lo); ++s) {
-      if (passive(0.25 * hi)) lo = 0.25 * hi;
-      else hi *= 0.25;
-    }
-    out.below_range = std::isnan(lo);
-  }
-  if (!std::isnan(lo) && !std::isnan(hi)) {
-    while (hi / lo > 1.0 + options.relative_precision) {
-      const double mid = std::sqrt(lo * hi);
-      if (passive(mid)) lo = mid;
-      else hi = mid;
-    }
-  }
-  out.k_max = lo;
-  out.k_fail = hi;
+  const StiffnessBracket found = searchStiffness(passive, k0, options.max_bracket_steps, options.relative_precision);
+  out.k_max = found.k_max;
+  out.k_fail = found.k_fail;
+  out.above_range = found.above_range;
+  out.below_range = found.below_range;
   double unstable = std::numeric_limits<double>::infinity();
   for (const TaskWallRun& run : out.runs) {
-    if (run.stiffness == lo) out.rendered_stiffness = run.rendered_stiffness;
+    if (run.stiffness == out.k_max) out.rendered_stiffness = run.rendered_stiffness;
     if (run.outcome == WallOutcome::kLimitCycle || run.outcome == WallOutcome::kDivergent)
       unstable = std::min(unstable, run.stiffness);
   }

@@ -17,10 +17,13 @@ namespace uhaptics::experiments {
 
 namespace {
 
-using Channels = std::array<double, wire::kMaxChannels>;
+using zwidth_detail::Channels;
+using zwidth_detail::HardwarePath;
 
 using zwidth_detail::kPi;
 using zwidth_detail::raisedCosine;
+using zwidth_detail::searchStiffness;
+using zwidth_detail::StiffnessBracket;
 using zwidth_detail::ticksFor;
 // Identification: the sinusoidal torque's frequency, its smooth onset, how many whole cycles are
 // measured, and how many sensor steps the motion must span to be measured through quantization.
@@ -87,79 +90,51 @@ class ServoHarness {
   ServoHarness(const ZWidthDevice& device, double period, int delay, FreeSpaceControl* free_space)
       : device_(device),
         plant_(device.make_plant ? device.make_plant(period) : nullptr),
-        period_(period),
-        delay_(delay),
-        free_space_(free_space),
-        joints_(device.spec.descriptor.joints),
-        actuators_(device.spec.descriptor.actuators) {
+        path_(device.spec, period, delay),
+        free_space_(free_space) {
     if (!plant_) throw Error("Z-width: device '" + device.name + "' has no plant");
-    if (plant_->jointCount() != joints_ || plant_->actuatorCount() != actuators_)
+    if (plant_->jointCount() != device.spec.descriptor.joints ||
+        plant_->actuatorCount() != device.spec.descriptor.actuators)
       throw Error("Z-width: device '" + device.name + "': the plant's joint or actuator count differs from its spec");
-    rate_.setResolution(device.spec.position_resolution.data(), joints_);
-    rate_.reset();
     if (free_space_) free_space_->reset(delay);
   }
 
   // Reads the plant; false when a reading is not finite.
-  bool sense() noexcept {
-    plant_->readJoints(raw_.data());
-    for (int i = 0; i < joints_; ++i) {
-      const double step = device_.spec.position_resolution[i];
-      q_[i] = step > 0.0 ? std::round(raw_[i] / step) * step : raw_[i];
-      if (!std::isfinite(q_[i])) return false;
-    }
-    const auto sample_us = static_cast<std::uint32_t>(std::llround(static_cast<double>(tick_) * period_ * 1e6));
-    rate_.update(q_.data(), joints_, sample_us, rates_.data());
-    return true;
-  }
+  bool sense() noexcept { return path_.read(*plant_); }
 
   // One period: free-space efforts plus `wall` on the joint (delayed, within the effort limits),
   // plus the user's effort. False when the plant reports a fault.
   bool step(double wall, double user) noexcept {
+    const long tick = path_.tick();
     Channels command{};
-    if (free_space_ && !free_space_->efforts(q_.data(), rates_.data(), tick_ == 0, period_, command.data()))
+    if (free_space_ && !free_space_->efforts(path_.q().data(), path_.rates().data(), tick == 0, path_.period(),
+                                             command.data()))
       command.fill(0.0);
     const int j = device_.joint;
+    const double limit = device_.spec.descriptor.effort_limit[j];
     command[j] += wall;
-    for (int a = 0; a < actuators_; ++a) {
-      const double limit = device_.spec.descriptor.effort_limit[a];
-      command[a] = std::isfinite(command[a]) ? std::clamp(command[a], -limit, limit) : 0.0;
-    }
-    const auto slot = [](long tick) { return static_cast<std::size_t>(tick % (kMaxZWidthDelay + 1)); };
-    pending_[slot(tick_)] = command;
-    pending_wall_[slot(tick_)] = std::clamp(wall, -device_.spec.descriptor.effort_limit[j],
-                                            device_.spec.descriptor.effort_limit[j]);
-    Channels applied{};
-    applied_wall_ = 0.0;
-    if (tick_ >= delay_) {
-      applied = pending_[slot(tick_ - delay_)];
-      applied_wall_ = pending_wall_[slot(tick_ - delay_)];
-    }
+    const auto slot = [](long t) { return static_cast<std::size_t>(t % (kMaxZWidthDelay + 1)); };
+    pending_wall_[slot(tick)] = std::clamp(wall, -limit, limit);
+    applied_wall_ = tick >= path_.delay() ? pending_wall_[slot(tick - path_.delay())] : 0.0;
+    Channels applied = path_.command(command);
     applied[j] += user;
     plant_->applyCommand(applied.data());
-    plant_->advance(period_);
-    ++tick_;
+    plant_->advance(path_.period());
     return plant_->lastFault() == Fault::kNone;
   }
 
-  const Channels& q() const noexcept { return q_; }
-  const Channels& rates() const noexcept { return rates_; }
+  const Channels& q() const noexcept { return path_.q(); }
+  const Channels& rates() const noexcept { return path_.rates(); }
   // The wall's share of the command that acted over the last period.
   double appliedWall() const noexcept { return applied_wall_; }
 
  private:
   const ZWidthDevice& device_;
   std::unique_ptr<BoardPlant> plant_;
-  double period_;
-  int delay_;
+  HardwarePath path_;
   FreeSpaceControl* free_space_;
-  int joints_, actuators_;
-  JointRateEstimator rate_;
-  Channels raw_{}, q_{}, rates_{};
-  std::array<Channels, kMaxZWidthDelay + 1> pending_{};
   std::array<double, kMaxZWidthDelay + 1> pending_wall_{};
   double applied_wall_ = 0.0;
-  long tick_ = 0;
 };
 
 void checkJoint(const ZWidthDevice& device) {
@@ -491,31 +466,11 @@ Boundary findBoundary(const ZWidthDevice& device, const JointIdentification& id,
     return out.runs.back().outcome == WallOutcome::kPassive;
   };
   const double k0 = start_k > 0.0 && std::isfinite(start_k) ? start_k : 1.0;
-  double lo = std::numeric_limits<double>::quiet_NaN(), hi = lo;
-  if (passive(k0)) {
-    lo = k0;
-    for (int s = 0; s < options.max_bracket_steps && std::isnan(hi); ++s) {
-      if (passive(4.0 * lo)) lo *= 4.0;
-      else hi = 4.0 * lo;
-    }
-    out.above_range = std::isnan(hi);
-  } else {
-    hi = k0;
-    for (int s = 0; s < options.max_bracket_steps && std::isnan(lo); ++s) {
-      if (passive(0.25 * hi)) lo = 0.25 * hi;
-      else hi *= 0.25;
-    }
-    out.below_range = std::isnan(lo);
-  }
-  if (!std::isnan(lo) && !std::isnan(hi)) {
-    while (hi / lo > 1.0 + options.relative_precision) {
-      const double mid = std::sqrt(lo * hi);
-      if (passive(mid)) lo = mid;
-      else hi = mid;
-    }
-  }
-  out.k_max = lo;
-  out.k_fail = hi;
+  const StiffnessBracket found = searchStiffness(passive, k0, options.max_bracket_steps, options.relative_precision);
+  out.k_max = found.k_max;
+  out.k_fail = found.k_fail;
+  out.above_range = found.above_range;
+  out.below_range = found.below_range;
   return out;
 }
 
