@@ -24,6 +24,7 @@ using zwidth_detail::StiffnessBracket;
 using zwidth_detail::ticksFor;
 using TaskChannels = zwidth_detail::Channels;
 using zwidth_detail::HardwarePath;
+using zwidth_detail::PeakToPeak;
 
 // Identification: the sinusoidal force's amplitude [N], its smooth onset, the whole cycles measured.
 constexpr double kTaskIdForce = 1.0;
@@ -247,8 +248,8 @@ TaskWallRun runTaskWall(const TaskZWidthDevice& device, const std::string& rende
   run.press_force = press;
   bool diverged = false, inside = false;
   double wall = 0.0, wall_true = 0.0, previous_x = 0.0, previous_f = 0.0, user_work = 0.0;
-  double window_lo = 0.0, window_hi = 0.0, hold_lo = 0.0, hold_hi = 0.0, hold_sum = 0.0, early_lo = 0.0,
-         early_hi = 0.0;
+  PeakToPeak window, hold, early;
+  double hold_sum = 0.0;
   long hold_count = 0;
   for (long k = 0; k <= n; ++k) {
     if (!harness.sense()) {
@@ -262,16 +263,13 @@ TaskWallRun runTaskWall(const TaskZWidthDevice& device, const std::string& rende
       wall_true = x;
     }
     if (k >= n_early && k < n_early_end) {
-      early_lo = k == n_early ? x : std::min(early_lo, x);
-      early_hi = k == n_early ? x : std::max(early_hi, x);
+      early.add(x);
     }
     if (k >= n_hold_window && k < n_release) {
-      hold_lo = k == n_hold_window ? x : std::min(hold_lo, x);
-      hold_hi = k == n_hold_window ? x : std::max(hold_hi, x);
+      hold.add(x);
     }
     if (k >= n_window) {
-      window_lo = k == n_window ? x : std::min(window_lo, x);
-      window_hi = k == n_window ? x : std::max(window_hi, x);
+      window.add(x);
     }
     if (k == n) break;
 
@@ -304,9 +302,9 @@ TaskWallRun runTaskWall(const TaskZWidthDevice& device, const std::string& rende
     previous_f = f;
   }
   run.generated_energy = -user_work;
-  run.final_amplitude = window_hi - window_lo;
-  run.hold_amplitude = hold_hi - hold_lo;
-  run.early_amplitude = early_hi - early_lo;
+  run.final_amplitude = window.width();
+  run.hold_amplitude = hold.width();
+  run.early_amplitude = early.width();
   run.hold_penetration = hold_count > 0 ? hold_sum / static_cast<double>(hold_count) : 0.0;
   if (run.hold_penetration > 0.0) run.rendered_stiffness = press / run.hold_penetration;
   const double peak = std::max(run.max_penetration, depth);

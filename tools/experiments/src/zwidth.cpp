@@ -19,6 +19,7 @@ namespace {
 
 using zwidth_detail::Channels;
 using zwidth_detail::HardwarePath;
+using zwidth_detail::PeakToPeak;
 
 using zwidth_detail::kPi;
 using zwidth_detail::raisedCosine;
@@ -367,7 +368,7 @@ WallRun runWall(const ZWidthDevice& device, const JointIdentification& id, const
   bool diverged = false, inside = false;
   double q_wall = 0.0, previous_q = 0.0, previous_user = 0.0, previous_wall = 0.0, user_work = 0.0;
   double user_variation = 0.0;  // total variation of the user's torque [N m]
-  double window_lo = 0.0, window_hi = 0.0, hold_lo = 0.0, hold_hi = 0.0;
+  PeakToPeak window, hold;
   Eigen::Matrix<double, 1, 1> qv, rv, uv;
   PassivityController<1>::Vector out;
   for (long k = 0; k <= n; ++k) {
@@ -382,12 +383,10 @@ WallRun runWall(const ZWidthDevice& device, const JointIdentification& id, const
     }
     if (k == n_press) q_wall = q + gap;
     if (k >= n_hold_window && k < n_release) {
-      hold_lo = k == n_hold_window ? q : std::min(hold_lo, q);
-      hold_hi = k == n_hold_window ? q : std::max(hold_hi, q);
+      hold.add(q);
     }
     if (k >= n_window) {
-      window_lo = k == n_window ? q : std::min(window_lo, q);
-      window_hi = k == n_window ? q : std::max(window_hi, q);
+      window.add(q);
     }
     if (k == n) break;
 
@@ -422,8 +421,8 @@ WallRun runWall(const ZWidthDevice& device, const JointIdentification& id, const
   }
   run.generated_energy = -user_work;
   run.passivity_dissipated = passivity.dissipated();
-  run.final_amplitude = window_hi - window_lo;
-  run.hold_amplitude = hold_hi - hold_lo;
+  run.final_amplitude = window.width();
+  run.hold_amplitude = hold.width();
   const double peak_energy = 0.5 * stiffness * run.max_penetration * run.max_penetration;
   // Quantized readings q + e, |e| <= step / 2: sum tau_k (e_k+1 - e_k) = -sum e_k+1 (tau_k+1 - tau_k) for
   // a torque that starts and ends at zero, at most step / 2 times the torque's total variation.

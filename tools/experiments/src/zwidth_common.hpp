@@ -83,6 +83,18 @@ inline double raisedCosine(double x) noexcept {
 
 inline long ticksFor(double seconds, double period) noexcept { return std::lround(seconds / period); }
 
+/// A value's peak-to-peak over a window of ticks (0 until it has seen one).
+struct PeakToPeak {
+  double lo = 0.0, hi = 0.0;
+  bool seen = false;
+  void add(double x) noexcept {
+    lo = seen ? std::min(lo, x) : x;
+    hi = seen ? std::max(hi, x) : x;
+    seen = true;
+  }
+  double width() const noexcept { return hi - lo; }
+};
+
 /// What searchStiffness found: the largest K passive and the smallest not (NaN when not bracketed).
 struct StiffnessBracket {
   double k_max = std::numeric_limits<double>::quiet_NaN();
