@@ -97,7 +97,8 @@ TEST_CASE("task Z-width: the rows check the bound where it applies and a rated s
     CHECK(tau.spec.rated_stiffness[k] > tau.spec.rated_stiffness[k - 1]);  // a faster loop, a stiffer wall
     CHECK(tau.spec.rated_stiffness_delayed[k] < tau.spec.rated_stiffness[k]);  // a late command, a softer one
   }
-  CHECK_FALSE(std::isfinite(uhaptics::taskZWidthDevice(findDevice("exo"), UHAPTICS_PARAMS_DIR).spec.rated_stiffness[1]));
+  const TaskZWidthDevice exo = uhaptics::taskZWidthDevice(findDevice("exo"), UHAPTICS_PARAMS_DIR);
+  CHECK_FALSE(std::isfinite(exo.spec.rated_stiffness[1]));
 
   DeviceTaskZWidth r;
   r.name = "tau";
@@ -122,7 +123,8 @@ TEST_CASE("task Z-width: the rows check the bound where it applies and a rated s
   CHECK(table.rows()[1].pass);
   CHECK(table.rows()[2].pass);
   CHECK_FALSE(table.rows()[3].pass);
-  r.boundaries[3].k_max = 4.0 * tau.spec.rated_stiffness_delayed[1];  // a rating far below the boundary is not derived from it
+  // A rating far below the boundary is not derived from it.
+  r.boundaries[3].k_max = 4.0 * tau.spec.rated_stiffness_delayed[1];
   CHECK_FALSE(taskZWidthReproduction({tau}, {r}).allPass());
   TaskZWidthDevice with_friction = tau;  // Coulomb friction: the viscous bound does not describe it
   with_friction.coulomb_friction = true;

@@ -244,8 +244,8 @@ std::string summaryText(const std::vector<DeviceZWidth>& results, const ZWidthOp
       if (off && !boundResolved(r, *off))
         appendf(out,
                 "%s at %g Hz: not checked against the bound: the identification at the contact mode's %.0f Hz moved "
-                "joint %d by %.1f sensor steps with 0.6 of its effort limit (b needs 10); the boundary there is set by the "
-                "encoder's quantization.\n",
+                "joint %d by %.1f sensor steps with 0.6 of its effort limit (b needs 10); the boundary there is set "
+                "by the encoder's quantization.\n",
                 r.name.c_str(), rate, off->identification.frequency_hz, r.joint,
                 off->identification.amplitude / r.resolution);
     }

@@ -48,7 +48,8 @@ class TaskHarness {
     if (!plant_ || !policy_) throw Error("task Z-width: device '" + device.name + "' has no plant or no policy");
     if (plant_->jointCount() != device.spec.descriptor.joints ||
         plant_->actuatorCount() != device.spec.descriptor.actuators)
-      throw Error("task Z-width: device '" + device.name + "': the plant's joint or actuator count differs from its spec");
+      throw Error("task Z-width: device '" + device.name +
+                  "': the plant's joint or actuator count differs from its spec");
     policy_->reset(delay);
     const Vec3 n = policy_->deviceToModelForce(device.normal);
     normal_model_ = n.norm() > 0.0 ? Vec3(n / n.norm()) : n;
@@ -418,7 +419,8 @@ std::vector<DeviceTaskZWidth> sweepTaskZWidth(const std::vector<TaskZWidthDevice
   parallelFor(tasks.size(), options.threads, [&](std::size_t t) {
     const Task& task = tasks[t];
     const double k_colgate = std::max(0.0, 2.0 * task.b_n * task.rate_hz / (1.0 + 2.0 * task.delay));
-    TaskBoundary b = findTaskBoundary(devices[task.device], task.renderer, task.rate_hz, task.delay, k_colgate, options);
+    TaskBoundary b =
+        findTaskBoundary(devices[task.device], task.renderer, task.rate_hz, task.delay, k_colgate, options);
     b.b_n = task.b_n;
     b.k_colgate = k_colgate;
     results[task.device].boundaries[task.slot] = std::move(b);

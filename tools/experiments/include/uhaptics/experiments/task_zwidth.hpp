@@ -9,7 +9,7 @@
 //      F = K p n for the penetration p = (wall - position) . n > 0 (CHAI3D's spring), else 0
 //   -> render(SceneInput{force = F}) -> efforts, `delay` periods late -> the plant.
 //
-// The plant is the one a CHAI3D "sim" session makes (ZTaskDevice::make_plant): no user of its own, so
+// The plant is the device definition's make_userless_plant (TaskZWidthDevice::make_plant): no user of its own, so
 // the scripted user is a force source on the tool (setUserForce, the model's task frame): a press
 // along -n, a hold, a smooth release. The user's hand also damps the tool (hand_damping along every
 // axis, for the whole run): a hand holding a tool is not a pure force source, and the plants' own
