@@ -20,9 +20,9 @@ namespace {
 using zwidth_detail::kPi;
 using zwidth_detail::raisedCosine;
 using zwidth_detail::searchStiffness;
-using zwidth_detail::StiffnessBracket;
+using zwidth_detail::setBracket;
 using zwidth_detail::ticksFor;
-using TaskChannels = zwidth_detail::Channels;
+using zwidth_detail::Channels;
 using zwidth_detail::HardwarePath;
 using zwidth_detail::PeakToPeak;
 
@@ -71,9 +71,9 @@ class TaskHarness {
     input.seen_position = state_.position;
     input.dt = path_.period();
     input.time = static_cast<double>(path_.tick()) * path_.period();
-    TaskChannels command{};
+    Channels command{};
     if (policy_->render(input, command.data()) != Fault::kNone) command.fill(0.0);
-    const TaskChannels applied = path_.command(command);
+    const Channels applied = path_.command(command);
     plant_->applyCommand(applied.data());
     plant_->setUserForce(user_force);
     plant_->advance(path_.period());
@@ -81,7 +81,7 @@ class TaskHarness {
   }
 
   // The policy's efforts for a scene force at the last reading, without stepping the plant.
-  bool probe(const Vec3& scene_force, TaskChannels& efforts) noexcept {
+  bool probe(const Vec3& scene_force, Channels& efforts) noexcept {
     SceneInput input;
     input.force = scene_force;
     input.seen_position = state_.position;
@@ -199,7 +199,7 @@ TaskIdentification identifyTask(const TaskZWidthDevice& device, double frequency
 
 double forceCapacity(const TaskZWidthDevice& device) {
   TaskHarness harness(device, device.renderers.front(), 1.0 / device.spec.servo_rate_hz, 0);
-  TaskChannels rest{}, pushed{};
+  Channels rest{}, pushed{};
   if (!harness.sense() || !harness.probe(Vec3::Zero(), rest) || !harness.probe(device.normal, pushed))
     throw Error("task Z-width: device '" + device.name + "': its policy renders nothing at the start pose");
   double capacity = std::numeric_limits<double>::infinity();
@@ -341,11 +341,7 @@ TaskBoundary findTaskBoundary(const TaskZWidthDevice& device, const std::string&
     return out.runs.back().outcome == WallOutcome::kPassive;
   };
   const double k0 = start_k > 0.0 && std::isfinite(start_k) ? start_k : 100.0;
-  const StiffnessBracket found = searchStiffness(passive, k0, options.max_bracket_steps, options.relative_precision);
-  out.k_max = found.k_max;
-  out.k_fail = found.k_fail;
-  out.above_range = found.above_range;
-  out.below_range = found.below_range;
+  setBracket(out, searchStiffness(passive, k0, options.max_bracket_steps, options.relative_precision));
   double unstable = std::numeric_limits<double>::infinity();
   for (const TaskWallRun& run : out.runs) {
     if (run.stiffness == out.k_max) out.rendered_stiffness = run.rendered_stiffness;

@@ -24,7 +24,7 @@ using zwidth_detail::PeakToPeak;
 using zwidth_detail::kPi;
 using zwidth_detail::raisedCosine;
 using zwidth_detail::searchStiffness;
-using zwidth_detail::StiffnessBracket;
+using zwidth_detail::setBracket;
 using zwidth_detail::ticksFor;
 // Identification: the sinusoidal torque's frequency, its smooth onset, how many whole cycles are
 // measured, and how many sensor steps the motion must span to be measured through quantization.
@@ -465,11 +465,7 @@ Boundary findBoundary(const ZWidthDevice& device, const JointIdentification& id,
     return out.runs.back().outcome == WallOutcome::kPassive;
   };
   const double k0 = start_k > 0.0 && std::isfinite(start_k) ? start_k : 1.0;
-  const StiffnessBracket found = searchStiffness(passive, k0, options.max_bracket_steps, options.relative_precision);
-  out.k_max = found.k_max;
-  out.k_fail = found.k_fail;
-  out.above_range = found.above_range;
-  out.below_range = found.below_range;
+  setBracket(out, searchStiffness(passive, k0, options.max_bracket_steps, options.relative_precision));
   return out;
 }
 

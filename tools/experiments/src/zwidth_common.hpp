@@ -136,4 +136,13 @@ StiffnessBracket searchStiffness(Passive&& passive, double k0, int max_steps, do
   return out;
 }
 
+/// Copies a bracket into a boundary record (Boundary, TaskBoundary: the same four fields).
+template <class BoundaryRecord>
+void setBracket(BoundaryRecord& out, const StiffnessBracket& found) noexcept {
+  out.k_max = found.k_max;
+  out.k_fail = found.k_fail;
+  out.above_range = found.above_range;
+  out.below_range = found.below_range;
+}
+
 }  // namespace uhaptics::experiments::zwidth_detail
