@@ -11,6 +11,7 @@
 #include "uhaptics/backends/board_emulator.hpp"
 #include "uhaptics/backends/tau_plant.hpp"  // TauBoardPlant with its own options (joint_io_test)
 #include "uhaptics/backends/servo_loop.hpp"
+#include "uhaptics/core/sanitized_build.hpp"
 
 namespace uhaptics::testing {
 
@@ -19,11 +20,7 @@ inline const std::string kParamsDir = UHAPTICS_PARAMS_DIR;
 // Sanitizer builds run the servo tick (renderer + the emulated board's simulation) several times
 // slower than the optimized build; on a loaded 2-core machine the TAU's then overruns 1 ms. Bounds
 // that depend on keeping real time are asserted in optimized builds and only printed under them.
-#if defined(__SANITIZE_ADDRESS__) || defined(__SANITIZE_THREAD__)
-inline constexpr bool kRealTimeBounds = false;
-#else
-inline constexpr bool kRealTimeBounds = true;
-#endif
+inline constexpr bool kRealTimeBounds = !kSanitizedBuild;
 
 struct DeviceCase {
   const DeviceDefinition* definition;

@@ -16,23 +16,10 @@
 #include "uhaptics/backends/device_definition.hpp"
 #include "uhaptics/core/fault.hpp"
 #include "uhaptics/core/limits.hpp"
+#include "uhaptics/core/sanitized_build.hpp"
 
 namespace uhaptics {
 
-namespace {
-// Sanitizers map terabytes of shadow memory: mlockall() would try to make it resident.
-#if defined(__SANITIZE_ADDRESS__) || defined(__SANITIZE_THREAD__)
-constexpr bool kSanitized = true;
-#elif defined(__has_feature)
-#if __has_feature(address_sanitizer) || __has_feature(thread_sanitizer)
-constexpr bool kSanitized = true;
-#else
-constexpr bool kSanitized = false;
-#endif
-#else
-constexpr bool kSanitized = false;
-#endif
-}  // namespace
 namespace {
 
 // "'TAU' (code 2)": a protocol device code with the registered device that has it.
@@ -292,7 +279,7 @@ std::string ServoLoop::realtimeNote() const {
   if (s == 0) return "real-time scheduling pending";
   const int m = memory_state_.load();
   const std::string memory = !config_.lock_memory ? "memory not locked (not requested)"
-                             : kSanitized         ? "memory not locked (a sanitizer's shadow memory cannot be)"
+                             : kSanitizedBuild    ? "memory not locked (a sanitizer's shadow memory cannot be)"
                              : m == 1             ? "memory locked"
                              : m == 0             ? "memory lock pending"
                                                   : std::string("memory lock refused (") + std::strerror(m) +
@@ -309,7 +296,7 @@ void ServoLoop::run() noexcept {
     param.sched_priority = config_.realtime_priority;
     const int err = pthread_setschedparam(pthread_self(), SCHED_FIFO, &param);
     realtime_state_.store(err == 0 ? 1 : err);
-    if (config_.lock_memory && !kSanitized) {
+    if (config_.lock_memory && !kSanitizedBuild) {
       // Touch the stack the loop will use before locking, so it is resident too.
       volatile char stack[64 * 1024];
       for (std::size_t i = 0; i < sizeof(stack); i += 4096) stack[i] = 0;
