@@ -43,6 +43,10 @@ BoardSpec boardSpecFromParams(const DeviceDefinition& device, const ParamFile& f
     };
     rated(stability + "/max_linear_stiffness", b.rated_stiffness);
     rated(stability + "/max_linear_stiffness_delayed", b.rated_stiffness_delayed);
+    b.max_linear_damping = file.number(stability + "/max_linear_damping", 0.0, 1e4);
+    // Only a device that senses its orientation states the damping about the tool.
+    const std::string angular = stability + "/max_angular_damping";
+    if (file.has(angular)) b.max_angular_damping = file.numberOr(angular, 0.0, 0.0, 1e2);
   }
   // The model and the board have read their parts; anything left is a key nobody knows.
   file.rejectUnreadKeys();

@@ -185,6 +185,24 @@ class ServoJointIo final : public JointIo {
 
 }  // namespace
 
+PassivityControllerOptions<Eigen::Dynamic> boardPassivityOptions(const BoardSpec& spec) {
+  PassivityControllerOptions<Eigen::Dynamic> options;
+  const int actuators = spec.descriptor.actuators;
+  options.effort_limit.resize(actuators);
+  double resolved_rate = 0.0;
+  for (int i = 0; i < actuators; ++i) {
+    const auto k = static_cast<std::size_t>(i);
+    const double limit = spec.descriptor.effort_limit[k];
+    options.effort_limit(i) = limit > 0.0 ? limit : std::numeric_limits<double>::infinity();
+    if (spec.sample_rate_hz > 0.0) {
+      const double slowest = spec.position_resolution[k] * spec.sample_rate_hz / JointRateEstimator::kMaxWindow;
+      resolved_rate = std::max(resolved_rate, slowest);
+    }
+  }
+  if (resolved_rate > 0.0) options.min_rate = resolved_rate;
+  return options;
+}
+
 void JointRateEstimator::setResolution(const double* steps, int n) noexcept {
   resolution_.fill(0.0);
   n = std::clamp(n, 0, wire::kMaxChannels);

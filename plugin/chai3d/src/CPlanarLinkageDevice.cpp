@@ -66,7 +66,7 @@ cPlanarLinkageDevice<N>::cPlanarLinkageDevice(unsigned int a_deviceNumber, const
   setCommonSpecifications(a_title, false);
   m_specifications.m_maxLinearForce = 1.0 / std::sqrt(lambda_max);
   m_specifications.m_maxLinearStiffness = 1000.0;  // paper 003's stiff environment K_e
-  m_specifications.m_maxLinearDamping = 5.0;       // assumed: well inside 1 kHz stability for these masses
+  this->setSpecifiedDamping();
   m_specifications.m_workspaceRadius = a_selection.option("workspace_radius", a_workspaceRadius, 0.01, 0.3);
 }
 

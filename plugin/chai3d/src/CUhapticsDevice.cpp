@@ -96,6 +96,13 @@ void cUhapticsDevice::setCommonSpecifications(const std::string& a_modelName, bo
   }
 }
 
+void cUhapticsDevice::setSpecifiedDamping() {
+  const std::string dir = m_selection.joint_io.params_dir.empty() ? paramsDirectory() : m_selection.joint_io.params_dir;
+  const uhaptics::BoardSpec spec = uhaptics::boardSpec(uhaptics::findDevice(m_selection.device), dir);
+  m_specifications.m_maxLinearDamping = spec.max_linear_damping;
+  if (m_specifications.m_sensedRotation) m_specifications.m_maxAngularDamping = spec.max_angular_damping;
+}
+
 void cUhapticsDevice::setPolicy(std::unique_ptr<uhaptics::DevicePolicy> a_policy, const double* a_restJoints) {
   static_assert(uhaptics::kMaxSensedJoints == C_MAX_DOF, "a policy reports as many joints as CHAI3D takes");
   if (!a_policy) throw uhaptics::Error("device '" + m_selection.device + "': no rendering policy");
@@ -115,55 +122,22 @@ void cUhapticsDevice::setPolicy(std::unique_ptr<uhaptics::DevicePolicy> a_policy
 }
 
 std::vector<double> cUhapticsDevice::specificationDampingCapsLocked() {
-  const auto stated = [](double b) { return std::isfinite(b) && b > 0.0 ? b : 0.0; };
-  const double linear = stated(m_specifications.m_maxLinearDamping);
-  const double angular = m_specifications.m_sensedRotation ? stated(m_specifications.m_maxAngularDamping) : 0.0;
-  // Central differences of the policy's kinematics around the rest joints; the step is far above
-  // the forward kinematics' tolerance and far below the joints' ranges.
-  constexpr double kStep = 1e-5;  // [rad or m]
-  std::array<double, C_MAX_DOF> joints = m_restJoints;
+  const double angular = m_specifications.m_sensedRotation ? m_specifications.m_maxAngularDamping : 0.0;
+  std::vector<double> caps = uhaptics::passivityDampingCaps(*m_policy, m_restJoints.data(), m_joints, m_actuators,
+                                                            m_specifications.m_maxLinearDamping, angular);
   const std::array<double, C_MAX_DOF> rates{};
-  State plus, minus;
-  std::vector<double> caps(static_cast<std::size_t>(m_actuators), 0.0);
-  for (int i = 0; i < m_actuators; ++i) {
-    joints[i] = m_restJoints[i] + kStep;
-    m_policy->sense(uhaptics::SensedJoints{joints.data(), rates.data(), true}, plus);
-    joints[i] = m_restJoints[i] - kStep;
-    m_policy->sense(uhaptics::SensedJoints{joints.data(), rates.data(), true}, minus);
-    joints[i] = m_restJoints[i];
-    const uhaptics::Vec3 linearRate = (plus.position - minus.position) / (2.0 * kStep);
-    const uhaptics::Mat3 turn = plus.rotation * minus.rotation.transpose();  // small: its skew part is the angle
-    const uhaptics::Vec3 angularRate =
-        0.5 * uhaptics::Vec3(turn(2, 1) - turn(1, 2), turn(0, 2) - turn(2, 0), turn(1, 0) - turn(0, 1)) / (2.0 * kStep);
-    const double cap = linear * linearRate.squaredNorm() + angular * angularRate.squaredNorm();
-    caps[static_cast<std::size_t>(i)] = std::isfinite(cap) ? cap : 0.0;
-  }
   m_policy->sense(uhaptics::SensedJoints{m_restJoints.data(), rates.data(), true}, m_state);
   return caps;
 }
 
 void cUhapticsDevice::configurePassivityLocked() {
-  const uhaptics::BoardSpec& spec = m_io->spec();
   uhaptics::PassivePolicy::Options options;
   options.actuators = m_actuators;
   auto& controller = options.controller;
+  controller = uhaptics::boardPassivityOptions(m_io->spec());
   controller.enabled = m_passivityMode == 1;
   controller.energy_threshold = m_passivityEnergyThreshold;
-  controller.effort_limit.resize(m_actuators);
-  double resolvedRate = 0.0;
-  for (int i = 0; i < m_actuators; ++i) {
-    const double limit = spec.descriptor.effort_limit[static_cast<std::size_t>(i)];
-    controller.effort_limit(i) = limit > 0.0 ? limit : std::numeric_limits<double>::infinity();
-    // The slowest rate the estimator resolves: one sensor step over its longest window.
-    if (spec.sample_rate_hz > 0.0) {
-      resolvedRate = std::max(resolvedRate, spec.position_resolution[static_cast<std::size_t>(i)] * spec.sample_rate_hz /
-                                                uhaptics::JointRateEstimator::kMaxWindow);
-    }
-  }
-  constexpr double kIdealSensorGuard = 1e-3;  // [rad/s or m/s] PassivityControllerOptions' default
-  controller.min_rate = !std::isnan(m_passivityMinRate) ? m_passivityMinRate
-                        : resolvedRate > 0.0           ? resolvedRate
-                                                       : kIdealSensorGuard;
+  if (!std::isnan(m_passivityMinRate)) controller.min_rate = m_passivityMinRate;
   const std::vector<double> caps = std::isnan(m_passivityMaxDamping)
                                        ? specificationDampingCapsLocked()
                                        : std::vector<double>(static_cast<std::size_t>(m_actuators), m_passivityMaxDamping);

@@ -1,6 +1,8 @@
 #include "uhaptics/renderers/passive_policy.hpp"
 
 #include <algorithm>
+#include <array>
+#include <cmath>
 #include <utility>
 
 #include "uhaptics/core/fault.hpp"
@@ -97,6 +99,37 @@ void PassivePolicy::recordFigures(std::uint64_t active_before, Fault fault) noex
     figures_.observeMaximum(fig_max_damping_, controller_.lastDamping().maxCoeff());
   }
   if (fault != Fault::kNone) figures_.count(fig_faults_);
+}
+
+std::vector<double> passivityDampingCaps(DevicePolicy& policy, const double* rest_joints, int joints, int actuators,
+                                         double linear_damping, double angular_damping) {
+  if (joints < 1 || joints > kMaxSensedJoints || actuators < 1 || actuators > joints)
+    throw Error("passivityDampingCaps: " + std::to_string(actuators) + " actuators of " + std::to_string(joints) +
+                " joints, accepted 1..joints of 1.." + std::to_string(kMaxSensedJoints));
+  const auto stated = [](double b) { return std::isfinite(b) && b > 0.0 ? b : 0.0; };
+  const double linear = stated(linear_damping), angular = stated(angular_damping);
+  // The step is far above the forward kinematics' tolerance and far below the joints' ranges.
+  constexpr double kStep = 1e-5;  // [rad or m]
+  std::array<double, kMaxSensedJoints> q{};
+  std::copy(rest_joints, rest_joints + joints, q.begin());
+  const std::array<double, kMaxSensedJoints> rates{};
+  SensedState plus, minus;
+  std::vector<double> caps(static_cast<std::size_t>(actuators), 0.0);
+  for (int i = 0; i < actuators; ++i) {
+    q[i] = rest_joints[i] + kStep;
+    policy.sense(SensedJoints{q.data(), rates.data(), true}, plus);
+    q[i] = rest_joints[i] - kStep;
+    policy.sense(SensedJoints{q.data(), rates.data(), true}, minus);
+    q[i] = rest_joints[i];
+    const Vec3 linear_rate = (plus.position - minus.position) / (2.0 * kStep);
+    const Mat3 turn = plus.rotation * minus.rotation.transpose();  // small: its skew part is the angle
+    const Vec3 angular_rate =
+        0.5 * Vec3(turn(2, 1) - turn(1, 2), turn(0, 2) - turn(2, 0), turn(1, 0) - turn(0, 1)) / (2.0 * kStep);
+    const double cap = linear * linear_rate.squaredNorm() + angular * angular_rate.squaredNorm();
+    caps[static_cast<std::size_t>(i)] = std::isfinite(cap) ? cap : 0.0;
+  }
+  policy.sense(SensedJoints{rest_joints, rates.data(), true}, plus);
+  return caps;
 }
 
 }  // namespace uhaptics

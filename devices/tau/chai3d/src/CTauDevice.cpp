@@ -57,8 +57,7 @@ cTauDevice::cTauDevice(unsigned int a_deviceNumber, const uhaptics::DeviceSelect
   m_specifications.m_maxAngularTorque = torque;
   m_specifications.m_maxLinearStiffness = uhaptics::TauPolicy::kSpringWallStiffness;
   m_specifications.m_maxAngularStiffness = 1.0;    // assumed: mild rotational springs
-  m_specifications.m_maxLinearDamping = 4.0;       // paper 001: Colgate's bound b > K T / 2 for 6000 N/m at 1 kHz
-  m_specifications.m_maxAngularDamping = 0.01;     // assumed
+  setSpecifiedDamping();
   m_specifications.m_workspaceRadius = tau.workspaceHalfSide();  // the 50 mm cube's inscribed sphere
 }
 

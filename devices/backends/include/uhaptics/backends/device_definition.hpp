@@ -44,6 +44,12 @@ struct BoardSpec {
   /// (docs/stability.md). NaN where the file rates none (the exoskeleton's user is position-driven).
   RatedStiffness rated_stiffness = kUnrated;
   RatedStiffness rated_stiffness_delayed = kUnrated;
+  /// The largest damping a renderer may add at the tool [N s/m] and about it [N m s/rad] (CHAI3D's
+  /// m_maxLinearDamping and m_maxAngularDamping): the passivity layer's caps, mapped to the joints by
+  /// passivityDampingCaps (passive_policy.hpp). The parameter file's "stability" section; 0 where it
+  /// states none (the layer then observes without damping).
+  double max_linear_damping = 0.0;
+  double max_angular_damping = 0.0;
 };
 
 /// The paper whose method the device reproduces, written once here: the reproduction rows name it by

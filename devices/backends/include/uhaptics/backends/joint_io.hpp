@@ -26,6 +26,7 @@
 #include "uhaptics/backends/board_catalog.hpp"
 #include "uhaptics/backends/board_emulator.hpp"
 #include "uhaptics/backends/servo_loop.hpp"
+#include "uhaptics/core/passivity_controller.hpp"
 
 namespace uhaptics {
 
@@ -157,6 +158,15 @@ class JointRateEstimator {
   std::uint32_t previous_us_ = 0;
   bool have_previous_ = false;
 };
+
+/// The passivity controller's options (passivity_controller.hpp) as the board states them: each
+/// actuated joint's effort limit from the descriptor (infinity where it states none), and the
+/// velocity guard at the slowest rate JointRateEstimator resolves at the board's sampling, one sensor
+/// step over its longest window, the largest over the actuated joints (ideal sensors: the options'
+/// default). The damping caps (passivityDampingCaps, from max_linear_damping and
+/// max_angular_damping) and the energy threshold are the caller's. Set-up: allocates nothing beyond
+/// the options.
+PassivityControllerOptions<Eigen::Dynamic> boardPassivityOptions(const BoardSpec& spec);
 
 /// The "sim" joint I/O over a plant the caller makes (on open(), again after each close()): a device
 /// class whose simulation needs a user or options of its own, or a test fixture. spec describes

@@ -223,6 +223,10 @@ class cUhapticsDevice : public cGenericHapticDevice {
   /// sensed and actuated, both hands) and whether the orientation is too; without it every angular
   /// limit is 0. The subclass then sets its forces, stiffness, damping and workspace.
   void setCommonSpecifications(const std::string& a_modelName, bool a_orientation);
+  /// m_maxLinearDamping (and m_maxAngularDamping when the orientation is sensed) as the device's
+  /// parameter file states them (BoardSpec::max_linear_damping, its "stability" section): the
+  /// passivity layer's caps at the tool. After setCommonSpecifications().
+  void setSpecifiedDamping();
   /// Folder of the device parameter files: uhaptics::defaultParamsDirectory() (params_location.hpp).
   static std::string paramsDirectory();
   /// The session statistics: where the policy records its figures (setPolicy's caller passes it).

@@ -40,6 +40,7 @@
 #include <cstdint>
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "uhaptics/core/passivity_controller.hpp"
 #include "uhaptics/renderers/device_policy.hpp"
@@ -99,5 +100,17 @@ class PassivePolicy final : public DevicePolicy {
   bool sensed_ = false;  // a reading is waiting for its render()
   int fig_energy_ = 0, fig_peak_ = 0, fig_dissipated_ = 0, fig_active_ = 0, fig_max_damping_ = 0, fig_faults_ = 0;
 };
+
+/// Per actuated joint, the damping cap [N m s/rad or N s/m] under which the joint's added damping
+/// puts at most linear_damping [N s/m] on the tool's motion and angular_damping [N m s/rad] on its
+/// rotation: b_i = b_lin |dp/dq_i|^2 + b_ang |dtheta/dq_i|^2, the tool's sensitivities from central
+/// differences of policy.sense() about rest_joints (its kinematics, whatever the device). A device's
+/// specification states its damping at the tool (BoardSpec::max_linear_damping, CHAI3D's
+/// m_maxLinearDamping); this turns it into the caps PassivityControllerOptions::max_damping_per_joint
+/// takes. Non-positive or non-finite damping counts as 0. Leaves the policy sensing rest_joints, at
+/// rest. Set-up: allocates; throws Error for joints outside 1..kMaxSensedJoints or actuators outside
+/// 1..joints.
+std::vector<double> passivityDampingCaps(DevicePolicy& policy, const double* rest_joints, int joints, int actuators,
+                                         double linear_damping, double angular_damping);
 
 }  // namespace uhaptics
