@@ -130,3 +130,36 @@ TEST_CASE("task Z-width: the rows check the bound where it applies and a rated s
   with_friction.coulomb_friction = true;
   CHECK(taskZWidthReproduction({with_friction}, {r}).rows().size() == 2);
 }
+
+TEST_CASE("task Z-width: the passivity layer at the tool, set up as the CHAI3D adapter sets it up") {
+  TaskZWidthDevice tau = taskZWidthDevice(findDevice("tau"), UHAPTICS_PARAMS_DIR);
+  const std::string passive = std::string("spring") + kPassivitySuffix;
+  REQUIRE(tau.renderers.back() == passive);  // measured on every device that has a Z-width
+  REQUIRE(tau.native_rate_renderers.back() == passive);
+  tau.renderers = {"spring", passive};
+  TaskZWidthOptions o = options({1000.0});
+  o.delays = {0, 1};
+  const std::vector<DeviceTaskZWidth> r = sweepTaskZWidth({tau}, o);
+  const auto find = [&](const std::string& renderer, int delay) -> const TaskBoundary& {
+    for (const TaskBoundary& b : r.at(0).boundaries)
+      if (b.renderer == renderer && b.delay == delay) return b;
+    FAIL("no boundary for " << renderer << " at delay " << delay);
+    return r.at(0).boundaries.front();
+  };
+  for (const int delay : {0, 1}) {
+    INFO("delay " << delay);
+    const TaskBoundary& spring = find("spring", delay);
+    const TaskBoundary& layered = find(passive, delay);
+    REQUIRE(std::isfinite(spring.k_max));
+    REQUIRE(std::isfinite(layered.k_max));
+    // The layer does not narrow the TAU's wall (measured 0.958 and 1.000 of the spring's K_max). It
+    // does not widen it either: the energy the user's press stores in the wall stays on the
+    // observer's balance, so the ring the wall's sampling adds past 2 b_n / T grows for longer than
+    // the hold before the observer reports net output (docs/stability.md).
+    CHECK(layered.k_max / spring.k_max == Approx(1.0).epsilon(0.1));
+  }
+  // Inside the bound the layered wall is passive and renders the scene's stiffness.
+  const TaskWallRun inside = runTaskWall(tau, passive, 1000.0, 0, 4500.0, TaskScript{});
+  CHECK(inside.outcome == WallOutcome::kPassive);
+  CHECK(inside.rendered_stiffness == Approx(4500.0).epsilon(0.1));
+}

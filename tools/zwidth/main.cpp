@@ -63,10 +63,10 @@ __attribute__((format(printf, 2, 3))) void appendf(std::string& out, const char*
 // 2 %, and a lighter grip than the simulated hand's has less damping, so proportionally less K.
 constexpr double kStiffnessMargin = 0.8;
 
-// The spring's task K_max of a device at (rate, delay); NaN when not swept.
-double taskStiffness(const DeviceTaskZWidth& r, double rate, int delay) {
+// A renderer's task K_max of a device at (rate, delay); NaN when not swept.
+double taskStiffness(const DeviceTaskZWidth& r, double rate, int delay, const std::string& renderer = "spring") {
   for (const TaskBoundary& b : r.boundaries)
-    if (b.rate_hz == rate && b.delay == delay && b.renderer == "spring") return b.k_max;
+    if (b.rate_hz == rate && b.delay == delay && b.renderer == renderer) return b.k_max;
   return std::nan("");
 }
 
@@ -137,6 +137,27 @@ std::string taskSummaryText(const std::vector<DeviceTaskZWidth>& results) {
   appendf(out, "K_stable: the largest K tried below every bouncing or diverging run (it may be active: the LQR wall "
                "pushes the tool back up to its plane against the user), bracketed within 2x. The LQR wall is "
                "designed for the TAU's 1 kHz only.\n");
+  const std::string passive = std::string("spring") + kPassivitySuffix;
+  bool layered = false;
+  for (const DeviceTaskZWidth& r : results)
+    for (const TaskBoundary& b : r.boundaries) layered = layered || b.renderer == passive;
+  if (layered) {
+    appendf(out, "\nThe passivity layer at the tool (%s: PassivePolicy set up as the CHAI3D adapter sets it up, from "
+                 "the board's effort limits and sensor resolution and the parameter file's damping), K_max with it "
+                 "over K_max without it:\n", passive.c_str());
+    appendf(out, "%-12s %8s %12s %12s\n", "device", "rate Hz", "delay 0", "delay 1");
+    for (const DeviceTaskZWidth& r : results)
+      for (const TaskBoundary& b : r.boundaries)
+        if (b.renderer == passive && b.delay == 0) {
+          const double now = b.k_max / taskStiffness(r, b.rate_hz, 0);
+          const double late = taskStiffness(r, b.rate_hz, 1, passive) / taskStiffness(r, b.rate_hz, 1);
+          appendf(out, "%-12s %8.0f %12.3g %12.3g\n", r.name.c_str(), b.rate_hz, now, late);
+        }
+    appendf(out, "nan: nothing passive with the layer down to the search's floor. The observer keeps the energy the "
+                 "user's press stores in the wall on its balance, so it sees no net output while the wall rings during "
+                 "a hold; on the redundant linkages it charges the null-space control's work as output and damps the "
+                 "self-motion, which the tool feels (docs/stability.md).\n");
+  }
   std::vector<double> rates;
   for (const DeviceTaskZWidth& r : results)
     for (const TaskBoundary& b : r.boundaries)

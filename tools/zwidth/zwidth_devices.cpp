@@ -1,13 +1,16 @@
 #include "zwidth_devices.hpp"
 
+#include <array>
 #include <cmath>
 #include <limits>
 #include <memory>
 
 #include "device_servo_renderers.hpp"
 #include "uhaptics/backends/board_catalog.hpp"
+#include "uhaptics/backends/joint_io.hpp"
 #include "uhaptics/core/fault.hpp"
 #include "uhaptics/models/param_file.hpp"
+#include "uhaptics/renderers/passive_policy.hpp"
 #include "uhaptics/renderers/tau_policy.hpp"
 
 namespace uhaptics {
@@ -110,12 +113,30 @@ experiments::TaskZWidthDevice taskZWidthDevice(const DeviceDefinition& device, c
     d.renderers = {"spring", "lqr"};
     d.native_rate_renderers = {"lqr"};
   }
+  // The spring again with the passivity layer on, configured as the CHAI3D adapter configures it for
+  // this board (passivity_max_damping unset): measured at the board's rate, where its velocity guard
+  // (the estimator's resolution at the board's sampling) applies.
+  d.renderers.push_back(std::string("spring") + experiments::kPassivitySuffix);
+  d.native_rate_renderers.push_back(d.renderers.back());
   const DeviceDefinition* definition = &device;  // registrations live for the program
-  d.make_policy = [definition, params_dir](const std::string& renderer) {
+  d.make_policy = [definition, params_dir, spec = d.spec, make_rest_plant = d.make_plant](const std::string& renderer) {
     std::unique_ptr<DevicePolicy> policy = makeDevicePolicy(*definition, params_dir);
+    const std::size_t base = renderer.find(experiments::kPassivitySuffix);
     if (auto* tau = dynamic_cast<TauPolicy*>(policy.get()))
-      tau->setWallMode(renderer == "lqr" ? TauPolicy::WallMode::kLqr : TauPolicy::WallMode::kSpring);
-    return policy;
+      tau->setWallMode(renderer.compare(0, base, "lqr") == 0 ? TauPolicy::WallMode::kLqr
+                                                             : TauPolicy::WallMode::kSpring);
+    if (base == std::string::npos) return policy;
+    const int joint_count = spec.descriptor.joints, actuators = spec.descriptor.actuators;
+    std::array<double, wire::kMaxChannels> rest{};
+    make_rest_plant(1.0 / spec.servo_rate_hz)->readJoints(rest.data());
+    PassivePolicy::Options options;
+    options.actuators = actuators;
+    options.controller = boardPassivityOptions(spec);
+    const std::vector<double> caps = passivityDampingCaps(*policy, rest.data(), joint_count, actuators,
+                                                          spec.max_linear_damping, spec.max_angular_damping);
+    options.controller.max_damping_per_joint = Eigen::Map<const Eigen::VectorXd>(caps.data(), actuators);
+    return std::unique_ptr<DevicePolicy>(
+        std::make_unique<PassivePolicy>(std::move(policy), options, FigureRecorder::none()));
   };
   return d;
 }

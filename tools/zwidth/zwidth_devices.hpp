@@ -24,7 +24,10 @@ std::vector<experiments::ZWidthDevice> registeredZWidthDevices(const std::string
 /// the renderer forced (the TAU: "spring" or "lqr" wall mode), the wall's normal +z in the device
 /// frame (the user presses down: the TAU's table-top scenes, the planar devices' palpation axis, task
 /// y = device -z), and the hand damping of the device's default simulated user (the TAU's b_h, the
-/// planar grip's). The exoskeleton's user is position-driven: skip_note says so.
+/// planar grip's). Each device's spring is measured again with the passivity layer on
+/// ("spring+passivity": PassivePolicy set up from the board spec and the parameter file's damping as
+/// the CHAI3D adapter sets it up), at the board's servo rate. The exoskeleton's user is
+/// position-driven: skip_note says so.
 experiments::TaskZWidthDevice taskZWidthDevice(const DeviceDefinition& device, const std::string& params_dir);
 std::vector<experiments::TaskZWidthDevice> registeredTaskZWidthDevices(const std::string& params_dir);
 

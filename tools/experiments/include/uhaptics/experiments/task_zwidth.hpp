@@ -49,6 +49,9 @@
 
 namespace uhaptics::experiments {
 
+/// A renderer's name with this suffix is that renderer under the passivity layer (PassivePolicy).
+inline constexpr const char* kPassivitySuffix = "+passivity";
+
 /// One device as the task harness drives it.
 struct TaskZWidthDevice {
   std::string name;
