@@ -14,6 +14,8 @@
 
 #include "chai3d.h"
 #include "point_mass_device.hpp"
+#include "uhaptics/backends/board_catalog.hpp"
+#include "uhaptics/backends/params_location.hpp"
 #include "uhaptics/chai3d/CPassiveHapticDevice.hpp"
 #include "uhaptics/chai3d/device_registry.hpp"
 #include "uhaptics/tools/alloc_probe.hpp"
@@ -442,6 +444,11 @@ TEST_CASE("device option passivity: every registered device runs with the layer 
     REQUIRE(device->open());
     const std::vector<double> caps = device->getPassivityDampingCaps();
     CHECK(static_cast<int>(caps.size()) >= 1);
+    // The specification's damping is the parameter file's, and a stated damping gives some joint a cap.
+    const uhaptics::BoardSpec spec =
+        uhaptics::boardSpec(uhaptics::findDevice(name), uhaptics::defaultParamsDirectory());
+    CHECK(device->getSpecifications().m_maxLinearDamping == spec.max_linear_damping);
+    if (spec.max_linear_damping > 0.0) CHECK(*std::max_element(caps.begin(), caps.end()) > 0.0);
     std::string listed;
     for (const double cap : caps) {
       CHECK(std::isfinite(cap));

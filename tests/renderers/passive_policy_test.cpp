@@ -377,3 +377,18 @@ TEST_CASE("passive policy: a servo tick allocates nothing") {
   CHECK(allocations == 0);
   CHECK(layer.controller().activeTicks() > 0);
 }
+
+TEST_CASE("passivityDampingCaps: the damping stated at the tool, seen at each actuated joint, bad counts refused") {
+  // The wall policy's tool is joint 0's position along x (dp/dq0 = 1) and turns with no joint: joint
+  // 0's cap is the linear damping, joint 1's is 0 whatever the angular damping.
+  JointWallPolicy policy(2, 100.0);
+  const std::array<double, 3> rest{0.01, 0.2, 0.3};
+  std::vector<double> caps = passivityDampingCaps(policy, rest.data(), 3, 2, 4.0, 1.0);
+  REQUIRE(caps.size() == 2);
+  CHECK(caps[0] == Approx(4.0).epsilon(1e-9));
+  CHECK(caps[1] == 0.0);
+  caps = passivityDampingCaps(policy, rest.data(), 3, 2, std::nan(""), -1.0);  // unstated: no damping
+  CHECK(caps == std::vector<double>{0.0, 0.0});
+  CHECK_THROWS_AS(passivityDampingCaps(policy, rest.data(), 2, 3, 4.0, 0.0), Error);  // more actuators than joints
+  CHECK_THROWS_AS(passivityDampingCaps(policy, rest.data(), 0, 0, 4.0, 0.0), Error);
+}

@@ -1,7 +1,7 @@
 #pragma once
 // Whether this translation unit is built with AddressSanitizer or ThreadSanitizer. GCC announces
-// them with __SANITIZE_ADDRESS__ / __SANITIZE_THREAD__; clang (before 16) only through
-// __has_feature, so both are asked.
+// them with __SANITIZE_ADDRESS__ / __SANITIZE_THREAD__; the clang this project's ASan tree uses
+// (Debian 12's clang 14) only through __has_feature, so both are asked.
 
 namespace uhaptics {
 
