@@ -147,11 +147,15 @@ def hand_config(table, example, device):
 
 
 def figure(stats, name):
-    """A renderer figure or a session statistic by name; "a/b" is their ratio (e.g. the share of
+    """A renderer figure or a session statistic by name, "referee.NAME" one of the referee's figures
+    (the plant's truth: docs/chai3d.md, "The referee"); "a/b" is their ratio (e.g. the share of
     the contact ticks the LQR wall held: lqr_held_ticks/contact_ticks)."""
     if "/" in name:
         top, bottom = (figure(stats, part) for part in name.split("/", 1))
         return top / bottom if bottom > 0 else math.nan
+    if name.startswith("referee."):
+        value = (stats.get("referee") or {}).get(name[len("referee."):])
+        return float(value) if isinstance(value, (int, float)) else math.nan
     value = stats.get("renderer_figures", {}).get(name, stats.get(name))
     return float(value) if isinstance(value, (int, float)) else math.nan
 
@@ -265,11 +269,18 @@ def run_one(table, example, device, backend, display, out, screenshots, reject=F
     problems, expectation = check(table, example, device, stats, backend)
     if ARGS.method_off:
         # The method is off: the run must still be a valid session that touched the scene, and its
-        # rule must fail (otherwise the rule does not measure the method).
+        # rule must fail (otherwise the rule does not measure the method); a rule that reads the
+        # referee must fail on the referee's figures, what the user felt, not only on the method's
+        # own account of itself.
         rule_misses = [p for p in problems if "expected" in p]
         others = [p for p in problems if "expected" not in p]
-        problems = others if others else ([] if rule_misses else
-                                           [f"the rule '{expectation}' held with the method off: it does not measure the method"])
+        reads_referee = any(name.startswith("referee.") for rule in expectation.split("|")
+                            for name in table["devices"][device]["engagement"][rule])
+        felt = [p for p in rule_misses if p.startswith("referee.")] if reads_referee else rule_misses
+        problems = others if others else ([] if felt else
+                                           [f"the rule '{expectation}' held with the method off"
+                                            + (" on the referee's figures" if reads_referee else "")
+                                            + ": it does not measure the method"])
         expectation = "counterfactual: " + expectation + (" fails (" + "; ".join(rule_misses) + ")" if rule_misses else "")
     if ended_early is not None:
         problems.insert(0, f"the example ended with {ended_early} before its {seconds:.0f} s")
@@ -297,6 +308,11 @@ def run_isolated(table, example, device):
     return result
 
 
+# The referee's figures dropin.csv carries beside the method's own.
+REFEREE_COLUMNS = ("max_true_penetration_mm", "rendered_stiffness_N_per_m", "rate_hardness_N_per_m",
+                   "force_error_rms_N", "generated_energy_mJ", "chatter_N", "saturated_share", "peak_user_force_N")
+
+
 def describe(result):
     stats = result["stats"] or {}
     figures = stats.get("renderer_figures", {})
@@ -315,6 +331,7 @@ def write_report(results, out, table):
             "peak_force_N": s.get("peak_force_N", ""), "peak_output": s.get("peak_output", ""),
             "max_entry_depth_mm": s.get("renderer_figures", {}).get("max_entry_depth_mm", ""),
             "max_penetration_mm": s.get("renderer_figures", {}).get("max_penetration_mm", ""),
+            **{f"referee_{k}": (s.get("referee") or {}).get(k, "") for k in REFEREE_COLUMNS},
             "renderer": s.get("renderer", ""), "figures": describe(r),
             "screenshot": os.path.basename(r["shot"]) if r.get("shot") else "",
             "screenshot_in_contact": r.get("shot_in_contact", ""),
@@ -400,6 +417,8 @@ def main():
                 print(f"  {stats['ticks']} ticks at {stats['rate_hz']:.0f} Hz, {stats['contacts']} contacts, "
                       f"peak {stats['peak_force_N']:.2f} N, renderer {stats['renderer']}; {describe(result)}; "
                       f"visited {stats.get('visited_min_radii')} .. {stats.get('visited_max_radii')} radii")
+                if stats.get("referee"):
+                    print("  referee: " + ", ".join(f"{k}={stats['referee'].get(k)}" for k in REFEREE_COLUMNS))
             if result["problems"]:
                 print("  example output (last lines):\n    " +
                       "\n    ".join(result["log"].strip().splitlines()[-15:]))

@@ -125,3 +125,22 @@ TEST_CASE("session stats keep the box of visited positions", "[chai3d][stats]") 
   CHECK_THAT(uhaptics::formatStatsJson(s, "exo", "sim", "x"), Catch::Contains("\"visited_min_radii\": [0.1, -0.3, 0]"));
   CHECK_THAT(uhaptics::formatStatsJson(s, "exo", "sim", "x"), Catch::Contains("\"visited_max_radii\": [0.2, -0.2, 0.3]"));
 }
+
+TEST_CASE("the referee's figures reach the JSON as an object, null where nothing was measured",
+          "[chai3d][stats][referee]") {
+  SessionStats stats;
+  stats.start(0.0);
+  uhaptics::SessionStatsSnapshot s = stats.snapshot(1.0);
+  CHECK_THAT(uhaptics::formatStatsJson(s, "tau", "usb", "x"), !Catch::Contains("referee"));  // none on usb
+  s.has_referee = true;
+  s.referee.contacts = 2;
+  s.referee.max_true_penetration_mm = 0.75;
+  s.referee.generated_energy_mJ = -1.5;
+  const std::string json = uhaptics::formatStatsJson(s, "tau", "sim", "x");
+  CHECK_THAT(json, Catch::Contains("\"referee\": {"));
+  CHECK_THAT(json, Catch::Contains("\"contacts\": 2,"));
+  CHECK_THAT(json, Catch::Contains("\"max_true_penetration_mm\": 0.75,"));
+  CHECK_THAT(json, Catch::Contains("\"generated_energy_mJ\": -1.5,"));
+  CHECK_THAT(json, Catch::Contains("\"rendered_stiffness_N_per_m\": null,"));  // no hold: NaN -> null
+  CHECK_THAT(json, Catch::EndsWith("}\n}\n"));
+}

@@ -23,6 +23,7 @@ struct Result {
   double max_penetration = 0.0;  // m, tool centre below (surface + tool radius)
   bool lqr_engaged = false;
   std::uint64_t contacts = 0;
+  uhaptics::RefereeReport referee;  // the plant's truth
 };
 
 // A rigid block (a mesh, CHAI3D's finger proxy) whose top face is 0.2 workspace radii below the
@@ -43,7 +44,10 @@ Result pushIntoBlock(cTauDevice::cWallMode mode, double stiffness) {
     result.lqr_engaged = result.lqr_engaged || device->isLqrWallEngaged();
     REQUIRE(device->getLastFault() == uhaptics::Fault::kNone);
   }
-  result.contacts = device->getSessionStats().contacts;
+  const uhaptics::SessionStatsSnapshot stats = device->getSessionStats();
+  REQUIRE(stats.has_referee);
+  result.contacts = stats.contacts;
+  result.referee = stats.referee;
   return result;
 }
 
@@ -107,6 +111,29 @@ TEST_CASE("tau: the LQR wall holds a 12 N push against a rigid mesh under 1 mm, 
   const Result spring = pushIntoBlock(cTauDevice::C_TAU_WALL_SPRING, 6000.0);
   CHECK_FALSE(spring.lqr_engaged);
   CHECK(spring.max_penetration > 1.5e-3);
+}
+
+TEST_CASE("tau: the referee, from the plant's truth: the spring sinks F / k, the LQR wall holds 1 mm and is "
+          "3x stiffer", "[chai3d][tau][referee]") {
+  const Result spring = pushIntoBlock(cTauDevice::C_TAU_WALL_SPRING, 6000.0);
+  const Result lqr = pushIntoBlock(cTauDevice::C_TAU_WALL_AUTO, 6000.0);
+  const uhaptics::RefereeReport& s = spring.referee;
+  const uhaptics::RefereeReport& l = lqr.referee;
+  INFO("spring: " << s.max_true_penetration_mm << " mm, " << s.rendered_stiffness_N_per_m << " N/m, "
+                  << s.generated_energy_mJ << " mJ, chatter " << s.chatter_N << " N; LQR: "
+                  << l.max_true_penetration_mm << " mm, " << l.rendered_stiffness_N_per_m << " N/m, "
+                  << l.generated_energy_mJ << " mJ, chatter " << l.chatter_N << " N");
+  // The hand pushes 12 N (tau_push.hpp): a 6000 N/m spring holds it 2 mm deep and renders 6000 N/m,
+  // within the encoders' 0.1 mm at the tool.
+  CHECK(s.peak_user_force_N == Approx(12.0).epsilon(0.02));
+  CHECK(s.max_true_penetration_mm == Approx(2.0).margin(0.2));
+  CHECK(s.rendered_stiffness_N_per_m == Approx(6000.0).epsilon(0.1));
+  CHECK(l.max_true_penetration_mm < 1.0);  // paper 001
+  CHECK(l.rendered_stiffness_N_per_m >= 3.0 * s.rendered_stiffness_N_per_m);
+  // The referee's depth agrees with the scene's geometry (the test's own measure, from the sensed
+  // tool against the block's known top), within the encoders' resolution at the tool.
+  CHECK(s.max_true_penetration_mm == Approx(1e3 * spring.max_penetration).margin(0.15));
+  CHECK(l.max_true_penetration_mm == Approx(1e3 * lqr.max_penetration).margin(0.15));
 }
 
 TEST_CASE("tau: a soft object stays with the spring (no LQR wall)", "[chai3d][tau]") {

@@ -163,6 +163,7 @@ uhaptics::DeviceSelection heldStill(const std::string& name) {
   uhaptics::DeviceSelection selection;
   selection.device = name;
   selection.hand_enabled = false;
+  selection.options["referee"] = 0.0;  // a board's path: nothing judges the plant's truth
   selection.wrap_joint_io = [](std::unique_ptr<uhaptics::JointIo> io) -> std::unique_ptr<uhaptics::JointIo> {
     return std::make_unique<HeldStillJointIo>(std::move(io));
   };

@@ -263,6 +263,11 @@ void BoardEmulator::setUserForce(const Vec3& force) noexcept {
   plant_.setUserForce(force);
 }
 
+void BoardEmulator::setSceneForce(const Vec3& force) noexcept {
+  const std::lock_guard<std::mutex> lock(mutex_);
+  plant_.setSceneForce(force);
+}
+
 bool BoardEmulator::readUserPoint(Vec3& position, Vec3& velocity) noexcept {
   const std::lock_guard<std::mutex> lock(mutex_);
   return plant_.readUserPoint(position, velocity);

@@ -66,6 +66,9 @@ class SimJointIo final : public JointIo {
   void setUserForce(const Vec3& force) noexcept override {
     if (plant_) plant_->setUserForce(force);
   }
+  void setSceneForce(const Vec3& force) noexcept override {
+    if (plant_) plant_->setSceneForce(force);
+  }
   std::uint32_t sampleTimeUs() const noexcept override { return static_cast<std::uint32_t>(std::llround(time_us_) & 0xffffffffLL); }
   std::string describe() const override { return spec().descriptor.name + ", sim"; }
 
@@ -150,6 +153,9 @@ class ServoJointIo final : public JointIo {
   }
   void setUserForce(const Vec3& force) noexcept override {
     if (emulator_ != nullptr) emulator_->setUserForce(force);
+  }
+  void setSceneForce(const Vec3& force) noexcept override {
+    if (emulator_ != nullptr) emulator_->setSceneForce(force);
   }
   LinkStatus linkStatus() const noexcept override {
     if (!loop_) return LinkStatus::kClosed;
@@ -269,9 +275,22 @@ const char* toString(LinkStatus s) noexcept {
   return "unknown link status";
 }
 
-std::unique_ptr<JointIo> makeSimJointIo(BoardSpec spec, std::function<std::unique_ptr<BoardPlant>()> make_plant) {
+namespace {
+using PlantFactory = std::function<std::unique_ptr<BoardPlant>()>;
+// The factory's plants with the referee around them (none without a channel).
+PlantFactory refereed(PlantFactory make_plant, std::shared_ptr<RefereeChannel> channel) {
+  if (!channel) return make_plant;
+  return [make_plant = std::move(make_plant), channel = std::move(channel)]() -> std::unique_ptr<BoardPlant> {
+    std::unique_ptr<BoardPlant> plant = make_plant();
+    if (!plant) return plant;
+    return std::make_unique<RefereedPlant>(std::move(plant), channel);
+  };
+}
+}  // namespace
+
+std::unique_ptr<JointIo> makeSimJointIo(BoardSpec spec, PlantFactory make_plant, std::shared_ptr<RefereeChannel> referee) {
   if (!make_plant) throw Error("makeSimJointIo: no plant factory");
-  return std::make_unique<SimJointIo>(std::move(spec), std::move(make_plant));
+  return std::make_unique<SimJointIo>(std::move(spec), refereed(std::move(make_plant), std::move(referee)));
 }
 
 std::vector<std::string> jointIoBackends() { return {"sim", "emulated", "usb"}; }
@@ -287,15 +306,25 @@ std::unique_ptr<JointIo> makeJointIo(const std::string& device, const std::strin
   if (options.emulator_control && backend != "emulated")
     throw Error("device '" + device + "': emulator_control is given but the backend is " + backend +
                 "; board faults can be injected only with the emulated backend");
+  if (options.referee && backend == "usb")
+    throw Error("device '" + device + "': a referee needs the simulated truth (sim or emulated), not usb");
   if (options.params_dir.empty()) throw Error("makeJointIo: params_dir is required (the device parameter files)");
   BoardSpec spec = options.params_file.empty() ? boardSpec(definition, options.params_dir)
                                                : boardSpecFromFile(definition, options.params_file);
   if (backend == "sim") {
     const std::string path = spec.params_path;
-    return makeSimJointIo(std::move(spec), [&definition, path] { return definition.make_plant(path); });
+    return makeSimJointIo(std::move(spec), [&definition, path] { return definition.make_plant(path); }, options.referee);
+  }
+  PlantFactory emulated_plant = options.emulated_plant;
+  if (backend == "emulated" && options.referee) {
+    if (!emulated_plant) {
+      const std::string path = spec.params_path;
+      emulated_plant = [&definition, path] { return definition.make_plant(path); };
+    }
+    emulated_plant = refereed(std::move(emulated_plant), options.referee);
   }
   return std::make_unique<ServoJointIo>(definition, std::move(spec), backend, options.servo, options.renderer,
-                                        options.emulator_control, options.emulated_plant);
+                                        options.emulator_control, std::move(emulated_plant));
 }
 
 }  // namespace uhaptics

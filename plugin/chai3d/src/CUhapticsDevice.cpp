@@ -45,6 +45,9 @@ cUhapticsDevice::cUhapticsDevice(unsigned int a_deviceNumber, const uhaptics::De
       m_passivityEnergyThreshold(a_selection.option("passivity_energy_threshold", 0.0, 0.0, 10.0)),
       m_servoPeriod(a_servoPeriod),
       m_servoThreadRenders(a_selection.backend != "sim"),
+      m_referee(a_selection.backend != "usb" && a_selection.option("referee", 1.0, 0.0, 1.0) != 0.0
+                    ? std::make_shared<uhaptics::RefereeChannel>()
+                    : nullptr),
       m_staleTime(a_selection.option("stale_time", 0.01, 0.001, 1.0)),
       m_paced(a_selection.option("pace", 1.0, 0.0, 1.0) != 0.0),
       m_handEnabled(a_selection.hand_enabled && a_selection.backend != "usb"),
@@ -181,10 +184,12 @@ std::unique_ptr<uhaptics::JointIo> cUhapticsDevice::makeJointIo() {
     // The emulated board's device: with the scripted hand, the same simulated plant as on sim,
     // pushed by the hand each servo period; without it, the board's own device and user.
     if (m_selection.backend == "emulated" && m_handEnabled) options.emulated_plant = [this] { return makeSimulatedPlant(); };
+    options.referee = m_referee;
     io = uhaptics::makeJointIo(m_selection.device, m_selection.backend, options);
   } else {
     const uhaptics::DeviceDefinition& definition = uhaptics::findDevice(m_selection.device);
-    io = uhaptics::makeSimJointIo(uhaptics::boardSpec(definition, options.params_dir), [this] { return makeSimulatedPlant(); });
+    io = uhaptics::makeSimJointIo(uhaptics::boardSpec(definition, options.params_dir), [this] { return makeSimulatedPlant(); },
+                                  m_referee);
   }
   if (!m_selection.wrap_joint_io) return io;
   io = m_selection.wrap_joint_io(std::move(io));
@@ -219,7 +224,8 @@ uhaptics::Fault cUhapticsDevice::renderChecked(const uhaptics::SceneInput& a_inp
   return fault;
 }
 
-void cUhapticsDevice::pushHandLocked(double a_time) noexcept {
+void cUhapticsDevice::pushUserSideLocked(double a_time, const uhaptics::Vec3& a_asked) noexcept {
+  if (m_referee) m_io->setSceneForce(m_policy->deviceToModelForce(a_asked));
   if (!m_handEnabled) return;
   // The hand holds the device as it is (a damper on an encoder-differenced velocity would lag);
   // a plant without a point for it (its user is its own) is pushed from the sensed state.
@@ -392,7 +398,14 @@ void cUhapticsDevice::setStatsFile(const std::string& a_path) {
   m_statsPath = a_path;
 }
 
-uhaptics::SessionStatsSnapshot cUhapticsDevice::getSessionStats() const { return m_stats.snapshot(wallTime()); }
+uhaptics::SessionStatsSnapshot cUhapticsDevice::getSessionStats() const {
+  uhaptics::SessionStatsSnapshot snapshot = m_stats.snapshot(wallTime());
+  if (m_referee) {
+    snapshot.has_referee = true;
+    snapshot.referee = m_referee->latest();
+  }
+  return snapshot;
+}
 
 uhaptics::LinkStatus cUhapticsDevice::getLinkStatus() {
   const auto lock = lockApplication(false);
@@ -428,7 +441,7 @@ void cUhapticsDevice::tickLocked() noexcept {
     fault = renderChecked(input);
     m_io->command(m_efforts.data());
   }
-  pushHandLocked(t);
+  pushUserSideLocked(t, reading && sendForce ? m_commandForce : uhaptics::Vec3::Zero());
   const uhaptics::Fault backend = m_io->advance(m_servoPeriod);
   if (fault == uhaptics::Fault::kNone) fault = backend;
   // The simulation moved only now: sense its new state, which the application reads next.
@@ -459,6 +472,7 @@ void cUhapticsDevice::servoTick(const uhaptics::DeviceSnapshot& a_snapshot, doub
   m_stats.recordInput(stale);
   uhaptics::Fault fault = uhaptics::Fault::kNone;
   double force = 0.0;
+  uhaptics::Vec3 asked = uhaptics::Vec3::Zero();  // what the scene asks now (nothing while stale)
   if (!stale) {
     uhaptics::SceneInput input;
     input.force = published ? uhaptics::Vec3(m_servoInput.force[0], m_servoInput.force[1], m_servoInput.force[2])
@@ -471,6 +485,7 @@ void cUhapticsDevice::servoTick(const uhaptics::DeviceSnapshot& a_snapshot, doub
     input.time = t;
     fault = renderChecked(input);
     force = input.force.norm();
+    asked = input.force;
     m_staleTicks = 0;
     m_heldEfforts = m_efforts;
   } else {
@@ -482,7 +497,7 @@ void cUhapticsDevice::servoTick(const uhaptics::DeviceSnapshot& a_snapshot, doub
     for (int i = 0; i < m_actuators; ++i) m_efforts[i] = scale * m_heldEfforts[i];
   }
   std::copy(m_efforts.begin(), m_efforts.begin() + m_actuators, a_efforts);
-  pushHandLocked(t);
+  pushUserSideLocked(t, asked);
   m_lastFault = fault;
   ++m_ticks;
   recordTickLocked(force, fault);

@@ -209,7 +209,30 @@ std::string formatStatsJson(const SessionStatsSnapshot& stats, const std::string
       out << figure.value;
     }
   }
-  out << (stats.figure_count > 0 ? "\n  }\n" : "}\n") << "}\n";
+  out << (stats.figure_count > 0 ? "\n  }" : "}");
+  if (stats.has_referee) {
+    const RefereeReport& r = stats.referee;
+    const auto number = [&out](double v) -> std::ostream& { return std::isfinite(v) ? out << v : out << "null"; };
+    out << ",\n  \"referee\": {\n"
+        << "    \"samples\": " << r.samples << ",\n"
+        << "    \"seconds\": " << r.seconds << ",\n"
+        << "    \"contacts\": " << r.contacts << ",\n"
+        << "    \"contact_samples\": " << r.contact_samples << ",\n"
+        << "    \"hold_samples\": " << r.hold_samples << ",\n"
+        << "    \"onset_samples\": " << r.onset_samples << ",\n"
+        << "    \"turned_samples\": " << r.turned_samples << ",\n"
+        << "    \"max_true_penetration_mm\": ";
+    number(r.max_true_penetration_mm) << ",\n    \"rendered_stiffness_N_per_m\": ";
+    number(r.rendered_stiffness_N_per_m) << ",\n    \"rate_hardness_N_per_m\": ";
+    number(r.rate_hardness_N_per_m) << ",\n    \"force_error_rms_N\": ";
+    number(r.force_error_rms_N) << ",\n    \"generated_energy_mJ\": ";
+    number(r.generated_energy_mJ) << ",\n    \"chatter_N\": ";
+    number(r.chatter_N) << ",\n    \"saturated_share\": ";
+    number(r.saturated_share) << ",\n    \"peak_user_force_N\": ";
+    number(r.peak_user_force_N) << ",\n    \"peak_applied_force_N\": ";
+    number(r.peak_applied_force_N) << "\n  }";
+  }
+  out << "\n}\n";
   return out.str();
 }
 

@@ -1,6 +1,7 @@
 #include "uhaptics/backends/simulated_tau.hpp"
 
 #include <Eigen/Cholesky>
+#include <Eigen/LU>
 #include <algorithm>
 #include <cmath>
 
@@ -88,6 +89,12 @@ Fault SimulatedTau::linearize() noexcept {
   pose_lin_ = data_.pose;
   linearized_ = true;
   return Fault::kNone;
+}
+
+Vec3 SimulatedTau::toolForce() const noexcept {
+  const Eigen::PartialPivLU<Mat6> transpose(data_.J.transpose());
+  const Vec6 wrench = transpose.solve(applied_ - data_.gravity);
+  return wrench.allFinite() ? Vec3(wrench.head<3>()) : Vec3::Zero();
 }
 
 Fault SimulatedTau::step(const Vec6& tau_command, const Vec3& external_force) noexcept {

@@ -29,6 +29,15 @@ TauBoardPlant::TauBoardPlant(TauModel model, const Options& options)
   }
 }
 
+bool TauBoardPlant::readTruth(PlantTruth& truth) noexcept {
+  truth.position = sim_.pose().head<3>();
+  truth.velocity = sim_.toolVelocity();
+  truth.user_force = sim_.handForce() + user_force_;
+  truth.applied_force = sim_.toolForce();
+  truth.saturated = (sim_.appliedTorque().cwiseAbs().array() >= (1.0 - 1e-9) * model_->effortLimits().array()).any();
+  return true;
+}
+
 void TauBoardPlant::advance(double dt) noexcept {
   fault_ = Fault::kNone;
   for (long n = clock_.take(dt); n > 0; --n) {

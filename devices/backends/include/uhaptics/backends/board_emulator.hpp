@@ -64,6 +64,8 @@ class BoardEmulator final : public Transport {
   /// The user's hand on the board's device: BoardPlant::setUserForce() of its plant (a CHAI3D
   /// session's scripted hand moves the emulated device as it moves the simulated one).
   void setUserForce(const Vec3& force) noexcept;
+  /// BoardPlant::setSceneForce() of its plant: what the host's scene asks for, for a referee.
+  void setSceneForce(const Vec3& force) noexcept;
   /// BoardPlant::readUserPoint() of its plant: where that hand holds the device.
   bool readUserPoint(Vec3& position, Vec3& velocity) noexcept;
 

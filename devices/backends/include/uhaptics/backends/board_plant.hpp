@@ -13,6 +13,18 @@
 
 namespace uhaptics {
 
+/// The simulated device as it is where its user holds it, for the referee (referee.hpp) and nothing
+/// else: no rendering policy ever reads it. Device model task frame (planar devices: x, y, 0).
+struct PlantTruth {
+  Vec3 position = Vec3::Zero();       // [m] where the user holds the device
+  Vec3 velocity = Vec3::Zero();       // [m/s]
+  Vec3 user_force = Vec3::Zero();     // [N] the user's force on the device there, this period
+  /// [N] the force the actuators' efforts, as applied (after the board's limits and delay), exert
+  /// there in statics, beyond holding up the device's own weight: what the user feels in a hold.
+  Vec3 applied_force = Vec3::Zero();
+  bool saturated = false;             // an actuator is at its effort limit
+};
+
 class BoardPlant {
  public:
   virtual ~BoardPlant() = default;
@@ -41,6 +53,14 @@ class BoardPlant {
   /// Only plants made without a user of their own take it; a position-driven user (the finger in
   /// the exoskeleton) ignores it.
   virtual void setUserForce(const Vec3& force) noexcept { (void)force; }
+  /// The referee's view (PlantTruth) after the last advance(); false where the plant has none.
+  virtual bool readTruth(PlantTruth& truth) noexcept {
+    (void)truth;
+    return false;
+  }
+  /// The force [N] the scene asks the device to render this period (model task frame), for the
+  /// referee only: a plant moves by its actuators and its user, never by this.
+  virtual void setSceneForce(const Vec3& force) noexcept { (void)force; }
   /// The simulation's fault in the last advance() (kNone: it stepped as modelled).
   virtual Fault lastFault() const noexcept { return Fault::kNone; }
 };

@@ -25,6 +25,7 @@
 
 #include "uhaptics/backends/board_catalog.hpp"
 #include "uhaptics/backends/board_emulator.hpp"
+#include "uhaptics/backends/referee.hpp"
 #include "uhaptics/backends/servo_loop.hpp"
 #include "uhaptics/core/passivity_controller.hpp"
 
@@ -39,6 +40,10 @@ struct JointIoOptions {
   /// emulated only: the device behind the board emulator (e.g. a CHAI3D device's simulated plant,
   /// whose user is the caller's scripted hand); empty: the registered device's own plant and user.
   std::function<std::unique_ptr<BoardPlant>()> emulated_plant;
+  /// sim and emulated: the referee's channel (referee.hpp). The simulated device is then observed
+  /// from its truth every period and the figures published there; nothing of it reaches the caller's
+  /// rendering. Refused with usb (no truth to judge by). Empty: no referee, nothing observed.
+  std::shared_ptr<RefereeChannel> referee;
   /// emulated only: the handle through which a test or the soak run injects board faults into the
   /// open session (BoardEmulatorControl); refused with the other backends.
   std::shared_ptr<BoardEmulatorControl> emulator_control;
@@ -104,6 +109,9 @@ class JointIo {
   /// sim and emulated: the force [N] of a user the caller simulates on the end effector, in the
   /// device model's task frame (BoardPlant::setUserForce). usb: ignored (the user is a person).
   virtual void setUserForce(const Vec3& force) noexcept { (void)force; }
+  /// sim and emulated with a referee: the force [N] the scene asks for this period, in the device
+  /// model's task frame (BoardPlant::setSceneForce), for the referee alone. Otherwise ignored.
+  virtual void setSceneForce(const Vec3& force) noexcept { (void)force; }
 
   /// Why read() has (or has no) reading: kRunning while read() succeeds.
   virtual LinkStatus linkStatus() const noexcept { return isOpen() ? LinkStatus::kRunning : LinkStatus::kClosed; }
@@ -171,7 +179,9 @@ PassivityControllerOptions<Eigen::Dynamic> boardPassivityOptions(const BoardSpec
 /// The "sim" joint I/O over a plant the caller makes (on open(), again after each close()): a device
 /// class whose simulation needs a user or options of its own, or a test fixture. spec describes
 /// the plant (counts, effort limits for the safety stage).
-std::unique_ptr<JointIo> makeSimJointIo(BoardSpec spec, std::function<std::unique_ptr<BoardPlant>()> make_plant);
+/// With a referee channel, each session's plant is refereed (RefereedPlant).
+std::unique_ptr<JointIo> makeSimJointIo(BoardSpec spec, std::function<std::unique_ptr<BoardPlant>()> make_plant,
+                                        std::shared_ptr<RefereeChannel> referee = nullptr);
 
 /// Backends the factory offers, in the order to list them.
 std::vector<std::string> jointIoBackends();

@@ -4,6 +4,7 @@
 // Its user, by default: a grip holding the end effector where it starts (the paper's palpation
 // set-up). With a zero grip, the user is whoever calls setUserForce (a CHAI3D session's scripted
 // hand).
+#include <Eigen/Cholesky>
 #include <memory>
 #include <string>
 
@@ -49,6 +50,26 @@ class PlanarLinkagePlant final : public HeldTorquePlant<N> {
     sim_.setLoad(load_);
   }
   Fault lastFault() const noexcept override { return fault_; }
+  /// The end effector; the user's force is the load on it (grip and setUserForce); the applied force
+  /// is the task force of the applied torques, J#^T tau with the dynamically consistent inverse
+  /// J# = M^-1 J^T (J M^-1 J^T)^-1 (the rest of tau moves the self-motion, which a hold does not feel).
+  bool readTruth(PlantTruth& truth) noexcept override {
+    const Model& model = sim_.model();
+    const Vec<N>& q = sim_.position();
+    const Vec<N>& tau = sim_.appliedTorque();
+    typename Model::Jacobian J;
+    typename Model::MassMatrix M;
+    model.jacobian(q, J);
+    model.massMatrix(q, M);
+    const Mat<N, 2> minv_jt = Eigen::LLT<Mat<N, N>>(M).solve(J.transpose());
+    const Vec2 force = (J * minv_jt).ldlt().solve(minv_jt.transpose() * tau);
+    truth.position << sim_.endEffectorPosition(), 0.0;
+    truth.velocity << sim_.endEffectorVelocity(), 0.0;
+    truth.user_force << sim_.externalForce(), 0.0;
+    truth.applied_force << (force.allFinite() ? force : Vec2::Zero()), 0.0;
+    truth.saturated = (tau.cwiseAbs().array() >= (1.0 - 1e-9) * model.effortLimits().array()).any();
+    return true;
+  }
 
   const SimulatedPlanarLinkage<N>& sim() const noexcept { return sim_; }
 

@@ -41,6 +41,12 @@
 // Statistics (session_stats.hpp): recorded by whichever thread ticks, optionally written to a file
 // every half second and on close, so even a killed process leaves a recent record.
 //
+// Referee (option "referee", default 1 on sim and emulated; usb has none): the simulated plant is
+// judged from its truth (uhaptics::Referee, referee.hpp): true penetration, rendered stiffness,
+// rate-hardness, applied against asked force, energy given to the user, chatter, saturation. Each
+// servo tick hands it the force the scene asked for; it never feeds the policy. Its figures are the
+// statistics' "referee" object (docs/chai3d.md, "The referee"). 0 leaves the plant unobserved.
+//
 // Passivity layer (option "passivity", default 0: off): 1 wraps the device's policy in
 // uhaptics::PassivePolicy (passive_policy.hpp), the time-domain passivity observer and controller
 // on the actuated joints, in the same servo tick; 2 observes only (the energy figures, no
@@ -178,6 +184,8 @@ class cUhapticsDevice : public cGenericHapticDevice {
   /// default 1). CHAI3D's haptic loop then runs at the device's rate instead of spinning a core at
   /// SCHED_FIFO, which the kernel's real-time throttling would suspend for 50 ms of every second.
   bool getPaced() const { return m_paced; }
+  /// Whether the simulated plant is refereed (option "referee", sim and emulated; see the header comment).
+  bool getRefereeEnabled() const { return m_referee != nullptr; }
   /// The passivity layer: 0 off (default), 1 on (observer and damping), 2 observe only (option
   /// "passivity"; see the header comment).
   int getPassivityMode() const { return m_passivityMode; }
@@ -270,8 +278,9 @@ class cUhapticsDevice : public cGenericHapticDevice {
   void senseLocked(const double* a_positions, std::uint32_t a_sampleUs, bool a_first) noexcept;
   /// render() with the checks every backend applies: a fault or a non-finite effort sends zero.
   uhaptics::Fault renderChecked(const uhaptics::SceneInput& a_input) noexcept;
-  /// The scripted hand's force on the simulated or emulated plant, from the sensed state.
-  void pushHandLocked(double a_time) noexcept;
+  /// The user's side of a tick on the simulated or emulated plant: the scene's force a_asked (device
+  /// frame) to the referee, and the scripted hand's force, from the true state where the plant has it.
+  void pushUserSideLocked(double a_time, const uhaptics::Vec3& a_asked) noexcept;
   void recordTickLocked(double a_force, uhaptics::Fault a_fault) noexcept;
   void commandZeroLocked() noexcept;
   // Board backends, servo thread.
@@ -302,6 +311,7 @@ class cUhapticsDevice : public cGenericHapticDevice {
   State m_state;       // the policy's latest sense()
   const double m_servoPeriod;
   const bool m_servoThreadRenders;  // emulated, usb
+  const std::shared_ptr<uhaptics::RefereeChannel> m_referee;  // option "referee"; nullptr: none
   const double m_staleTime;         // [s]
   const bool m_paced;               // setForce...() waits for the next servo period
   bool m_lockStep = false;

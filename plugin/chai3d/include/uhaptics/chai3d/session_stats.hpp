@@ -7,6 +7,7 @@
 #include <cstdint>
 #include <string>
 
+#include "uhaptics/backends/referee.hpp"
 #include "uhaptics/renderers/device_policy.hpp"
 
 namespace uhaptics {
@@ -49,6 +50,10 @@ struct SessionStatsSnapshot {
   /// The device's renderer figures, in the order it declared them.
   std::array<RendererFigure, kMaxFigures> figures{};
   int figure_count = 0;
+  /// The referee's figures from the simulated plant's truth (sim and emulated; referee.hpp), filled
+  /// in by the device that has one: has_referee false on usb or with the option "referee" 0.
+  bool has_referee = false;
+  RefereeReport referee;
   /// The figure named name, or nullptr.
   const RendererFigure* figure(const std::string& name) const noexcept;
 };
@@ -105,7 +110,7 @@ class SessionStats final : public FigureRecorder {
 };
 
 /// One JSON object: the snapshot plus the labels that say what ran; the renderer figures are the
-/// object "renderer_figures".
+/// object "renderer_figures", the referee's (when there is one) the object "referee" (NaN: null).
 std::string formatStatsJson(const SessionStatsSnapshot& stats, const std::string& device,
                             const std::string& backend, const std::string& renderer);
 

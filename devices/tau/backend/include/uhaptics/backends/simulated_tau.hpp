@@ -78,6 +78,10 @@ class SimulatedTau {
   /// Hand force on the tool, averaged over the last period (what the user feels as a load).
   const Vec3& handForce() const noexcept { return hand_force_; }
   const Vec6& appliedTorque() const noexcept { return applied_; }
+  /// The force [N] the applied torques exert at the tool in statics beyond holding up the mechanism's
+  /// own weight: the translational part of w in J^T w = tau_applied - g(q), at the last step's
+  /// configuration. What a user holding the tool still feels (the referee's applied force).
+  Vec3 toolForce() const noexcept;
   double time() const noexcept { return time_; }
   /// One step()'s length [s] (SimulatedTauOptions::period, resolved).
   double period() const noexcept { return options_.period; }

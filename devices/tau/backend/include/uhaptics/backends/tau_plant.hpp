@@ -39,6 +39,9 @@ class TauBoardPlant final : public HeldTorquePlant<6> {
     return true;
   }
   void setUserForce(const Vec3& force) noexcept override { user_force_ = force; }
+  /// The tool point; the user's force is the hand's (its own, when it holds the tool) plus the
+  /// caller's (setUserForce); saturated when a motor is at its torque limit.
+  bool readTruth(PlantTruth& truth) noexcept override;
   Fault lastFault() const noexcept override { return fault_; }
 
   const TauModel& model() const noexcept { return *model_; }
