@@ -225,7 +225,7 @@ uhaptics::Fault cUhapticsDevice::renderChecked(const uhaptics::SceneInput& a_inp
 }
 
 void cUhapticsDevice::pushUserSideLocked(double a_time, const uhaptics::Vec3& a_asked) noexcept {
-  if (m_referee) m_io->setSceneForce(m_policy->deviceToModelForce(a_asked));
+  if (m_referee) m_io->setSceneForce(m_policy->sceneForceAtUserPort(a_asked));
   if (!m_handEnabled) return;
   // The hand holds the device as it is (a damper on an encoder-differenced velocity would lag);
   // a plant without a point for it (its user is its own) is pushed from the sensed state.

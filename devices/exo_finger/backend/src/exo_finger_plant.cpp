@@ -1,5 +1,7 @@
 #include "uhaptics/backends/exo_finger_plant.hpp"
 
+#include <cmath>
+
 #include "uhaptics/core/fault.hpp"
 
 namespace uhaptics {
@@ -27,7 +29,21 @@ void ExoFingerBoardPlant::applyCommand(const double* efforts) noexcept {
 }
 
 void ExoFingerBoardPlant::advance(double dt) noexcept {
-  for (long n = clock_.take(dt); n > 0; --n) sim_.step();
+  const double before = sim_.state().q(0);
+  long steps = 0;
+  for (long n = clock_.take(dt); n > 0; --n, ++steps) sim_.step();
+  if (steps > 0) lx_rate_ = (sim_.state().q(0) - before) / (static_cast<double>(steps) * clock_.period());
+}
+
+bool ExoFingerBoardPlant::readTruth(PlantTruth& truth) noexcept {
+  const ExoFingerState& s = sim_.state();
+  const double force = s.force(0);
+  truth.position = Vec3(s.q(0), 0.0, 0.0);
+  truth.velocity = Vec3(lx_rate_, 0.0, 0.0);
+  truth.applied_force = Vec3(force, 0.0, 0.0);
+  truth.user_force = -truth.applied_force;
+  truth.saturated = std::abs(force) >= (1.0 - 1e-9) * model_->effortLimits()(0);
+  return true;
 }
 
 }  // namespace uhaptics

@@ -117,6 +117,8 @@ Fault ExoFingerPolicy::render(const SceneInput& input, double* efforts) noexcept
   Model::TaskVector x_proxy = data_.x;
   if (pulled) x_proxy += (Jtip.transpose() * f_hand) / Zx;
   x_proxy += finger_torque_ / Zx;  // multi-point tools' joint torque
+  const double scene = (data_.J.transpose() * (Zx * (x_proxy - data_.x)))(0);  // S J^T Z_x (x_p - x)
+  scene_actuator_force_ = std::isfinite(scene) ? scene : 0.0;
   // The renderer solves for the subspace proxy exactly when it has a proxy off the probe to render
   // and none of its input checks fails (the same checks, on the same model evaluations of q): in
   // free space (no force, no joint torque) the proxy is the probe and every solve is skipped.

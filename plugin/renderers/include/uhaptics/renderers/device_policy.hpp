@@ -108,6 +108,11 @@ class DevicePolicy {
   /// The scene's device-frame force in the model's task frame (where a simulated user pushes the
   /// model's plant); unchanged by default.
   virtual Vec3 deviceToModelForce(const Vec3& force) const noexcept { return force; }
+  /// The scene's device-frame force at the port where the simulated plant states its truth
+  /// (PlantTruth, for the referee): the model's task frame by default (deviceToModelForce). A device
+  /// whose user holds it elsewhere than at the scene's tool point says here what the scene asked of
+  /// that port. Called after render() in the same period.
+  virtual Vec3 sceneForceAtUserPort(const Vec3& force) const noexcept { return deviceToModelForce(force); }
   /// A point [m] and a vector of the model's task frame in the device frame; unchanged by default.
   virtual Vec3 modelToDevicePoint(const Vec3& point) const noexcept { return point; }
   virtual Vec3 modelToDeviceVector(const Vec3& vector) const noexcept { return vector; }

@@ -79,6 +79,7 @@ class PassivePolicy final : public DevicePolicy {
   void readingLost() noexcept override;
   void endSession() noexcept override;
   Vec3 deviceToModelForce(const Vec3& force) const noexcept override { return wrapped_->deviceToModelForce(force); }
+  Vec3 sceneForceAtUserPort(const Vec3& force) const noexcept override { return wrapped_->sceneForceAtUserPort(force); }
   Vec3 modelToDevicePoint(const Vec3& point) const noexcept override { return wrapped_->modelToDevicePoint(point); }
   Vec3 modelToDeviceVector(const Vec3& vector) const noexcept override { return wrapped_->modelToDeviceVector(vector); }
 

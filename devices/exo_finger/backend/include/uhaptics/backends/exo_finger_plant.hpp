@@ -31,6 +31,10 @@ class ExoFingerBoardPlant final : public BoardPlant {
   void applyCommand(const double* efforts) noexcept override;
   void advance(double dt) noexcept override;
   Fault lastFault() const noexcept override { return sim_.state().fault; }
+  /// The user's port is the actuator, the only joint that does work on the position-driven finger:
+  /// position (l_x, 0, 0), the force it applies, and the finger's force on it, its opposite (the
+  /// linkage carries no load of its own). The referee's energy is then the actuator's work on the finger.
+  bool readTruth(PlantTruth& truth) noexcept override;
 
   const ExoFingerModel& model() const noexcept { return *model_; }
   const ExoFingerSim& sim() const noexcept { return sim_; }
@@ -39,6 +43,7 @@ class ExoFingerBoardPlant final : public BoardPlant {
   std::unique_ptr<const ExoFingerModel> model_;  // the simulation keeps a reference
   ExoFingerSim sim_;
   FixedStepClock clock_;
+  double lx_rate_ = 0.0;  // [m/s] the actuator's mean rate over the last advance()
 };
 
 }  // namespace uhaptics

@@ -61,6 +61,12 @@ class ExoFingerPolicy final : public DevicePolicy {
   void sense(const SensedJoints& reading, SensedState& state) noexcept override;
   Fault render(const SceneInput& input, double* efforts) noexcept override;
   void endSession() noexcept override;
+  /// The referee's port is the actuator (the plant's truth: l_x and its force, x = l_x): the scene's
+  /// pull there as the standard method maps it, S J^T Z_x (x_p - x), from the last render (zero when
+  /// the scene asks nothing).
+  Vec3 sceneForceAtUserPort(const Vec3& force) const noexcept override {
+    return force.isZero(0.0) && finger_torque_.isZero(0.0) ? Vec3::Zero() : Vec3(scene_actuator_force_, 0.0, 0.0);
+  }
 
   const Model& model() const noexcept { return *model_; }
   /// The finger as last sensed (joints, finger angles x, phalanx points).
@@ -98,6 +104,7 @@ class ExoFingerPolicy final : public DevicePolicy {
   double workspace_radius_ = 0.0, fingertip_force_ = 0.0, fingertip_stiffness_ = 0.0;
   Vec3 last_position_ = Vec3::Zero();
   Model::ActuatorVector actuator_ = Model::ActuatorVector::Zero();
+  double scene_actuator_force_ = 0.0;  // the scene's pull at the actuator, S J^T Z_x (x_p - x) [N]
   Vec2 finger_torque_ = Vec2::Zero();  // setFingerJointTorque()
   int fig_contact_ticks_, fig_proxy_distance_, fig_actuator_force_, fig_solves_, fig_active_impedance_;
 };
