@@ -274,8 +274,9 @@ def run_one(table, example, device, backend, display, out, screenshots, reject=F
         # own account of itself.
         rule_misses = [p for p in problems if "expected" in p]
         others = [p for p in problems if "expected" not in p]
-        reads_referee = any(name.startswith("referee.") for rule in expectation.split("|")
-                            for name in table["devices"][device]["engagement"][rule])
+        engagement = table["devices"][device]["engagement"]
+        reads_referee = any(name.startswith("referee.") for rule in expectation.split("|") if rule in engagement
+                            for name in engagement[rule])
         felt = [p for p in rule_misses if p.startswith("referee.")] if reads_referee else rule_misses
         problems = others if others else ([] if felt else
                                            [f"the rule '{expectation}' held with the method off"
