@@ -20,7 +20,6 @@ claim holds, 1 when one does not, 2 when a run could not be made.
 """
 import argparse
 import csv
-import json
 import math
 import os
 import subprocess
@@ -123,7 +122,7 @@ def write(out, table, rows, claims):
         writer = csv.writer(f, lineterminator="\n")
         writer.writerow(["paper", "quantity", "published", "measured", "criterion", "pass", "unit", "needs_data"])
         for c in claims:
-            ratio = c["method"] / c["baseline"] if c["baseline"] not in (0.0,) and not math.isnan(c["baseline"]) else math.nan
+            ratio = c["method"] / c["baseline"] if c["baseline"] != 0.0 else math.nan  # NaN stays NaN
             writer.writerow(["chai3d", f"{c['example']} with {c['device']} ({c['backend']}): {c['figure']}, method over "
                              f"baseline ({fmt(c['method'])} / {fmt(c['baseline'])})", "nan", ratio,
                              f"method {c['op']} {c['factor']} x baseline", 1 if c["pass"] else 0, "ratio", ""])

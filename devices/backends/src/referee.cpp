@@ -28,12 +28,6 @@ void RefereeOptions::validate() const {
 
 Referee::Referee(const RefereeOptions& options) : options_(options) { options_.validate(); }
 
-void Referee::reset() noexcept {
-  const RefereeOptions options = options_;
-  *this = Referee();
-  options_ = options;
-}
-
 void Referee::closeOnset() noexcept {
   if (!onset_open_) return;
   onset_open_ = false;

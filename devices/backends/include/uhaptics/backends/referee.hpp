@@ -93,8 +93,6 @@ class Referee {
  public:
   /// Validates the options (throws Error).
   explicit Referee(const RefereeOptions& options = {});
-  /// Forgets the session.
-  void reset() noexcept;
   /// One period. Non-finite samples are skipped (the plant reports its faults itself).
   void observe(const RefereeSample& sample) noexcept;
   RefereeReport report() const noexcept;
@@ -160,8 +158,6 @@ class RefereedPlant final : public BoardPlant {
   Fault lastFault() const noexcept override { return plant_->lastFault(); }
   bool readTruth(PlantTruth& truth) noexcept override { return plant_->readTruth(truth); }
   void setSceneForce(const Vec3& force) noexcept override { asked_ = force.allFinite() ? force : Vec3::Zero(); }
-
-  const Referee& referee() const noexcept { return referee_; }
 
  private:
   std::unique_ptr<BoardPlant> plant_;
