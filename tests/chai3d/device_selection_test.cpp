@@ -90,3 +90,38 @@ TEST_CASE("config file selects, the environment overrides", "[chai3d][selection]
   CHECK(s.option("coupling_stiffness", 1.0, 0.0, 1e4) == 1.0);  // options are per device
   std::remove(path.c_str());
 }
+
+TEST_CASE("hand recording options: record and replay, refused where they cannot work", "[chai3d][selection][recording]") {
+  const std::string recording = "uhaptics-selection-hand.csv";
+  {
+    std::ofstream file(recording);
+    file << "# uhaptics hand recording\n# format_version: 1\n# workspace_radius_m: 0.025\n"
+            "time_s,anchor_x,anchor_y,anchor_z,anchor_vx,anchor_vy,anchor_vz,grip_stiffness_N_per_m,"
+            "grip_damping_N_s_per_m,grip_max_force_N,scene_fx_N,scene_fy_N,scene_fz_N,scene_x,scene_y,scene_z\n"
+            "0,0,0,0.5,0,0,-0.75,1500,20,12,0,0,0,0,0,0.5\n"
+            "0.01,0,0,0.4925,0,0,-0.75,1500,20,12,0,0,0,0,0,0.4925\n";
+  }
+  FakeEnvironment env;
+  env.values = {{"UHAPTICS_DEVICE", "tau"}, {"UHAPTICS_RECORD", "tau-hand.csv"}, {"UHAPTICS_HAND_RECORDING", recording}};
+  const auto s = readDeviceSelection(kDevices, kBackends, env.lookup());
+  CHECK(s.record_path == "tau-hand.csv");
+  REQUIRE(s.hand.recording);
+  CHECK(s.hand.recording->samples.size() == 2);
+  CHECK(s.hand_path_given);  // a position-driven device follows the recorded hand
+  // Recording needs the scripted hand.
+  env.values["UHAPTICS_HAND"] = "off";
+  CHECK_THROWS_WITH(readDeviceSelection(kDevices, kBackends, env.lookup()),
+                    Catch::Contains("UHAPTICS_RECORD = 'tau-hand.csv'") && Catch::Contains("scripted hand"));
+  env.values.erase("UHAPTICS_HAND");
+  // A malformed recording is refused with its file, line and field.
+  {
+    std::ofstream file(recording, std::ios::app);
+    file << "0.02,0,0,0.485,0,0,-0.75,1500,20,-3,0,0,0,0,0,0.485\n";
+  }
+  CHECK_THROWS_WITH(readDeviceSelection(kDevices, kBackends, env.lookup()),
+                    Catch::Contains(recording + ":7: grip_max_force_N"));
+  env.values["UHAPTICS_HAND_RECORDING"] = "/nonexistent/hand.csv";
+  CHECK_THROWS_WITH(readDeviceSelection(kDevices, kBackends, env.lookup()),
+                    Catch::Contains("/nonexistent/hand.csv: cannot read"));
+  std::remove(recording.c_str());
+}

@@ -51,6 +51,7 @@ cUhapticsDevice::cUhapticsDevice(unsigned int a_deviceNumber, const uhaptics::De
       m_staleTime(a_selection.option("stale_time", 0.01, 0.001, 1.0)),
       m_paced(a_selection.option("pace", 1.0, 0.0, 1.0) != 0.0),
       m_handEnabled(a_selection.hand_enabled && a_selection.backend != "usb"),
+      m_recordPath(a_selection.record_path),
       m_joints(a_joints),
       m_actuators(a_actuators),
       m_statsPath(a_selection.stats_path) {
@@ -65,6 +66,10 @@ cUhapticsDevice::cUhapticsDevice(unsigned int a_deviceNumber, const uhaptics::De
   m_deviceAvailable = true;
   m_deviceReady = false;
   m_hand = std::make_unique<uhaptics::ScriptedHand>(a_selection.hand, 1.0, uhaptics::Vec3::Zero());
+  if (!m_recordPath.empty()) {
+    m_recorder = std::make_unique<uhaptics::HandRecorder>(
+        1.0 / kHandRecordingRate, static_cast<std::size_t>(kHandRecordingRate * kHandRecordingSeconds));
+  }
   m_bridge = std::make_unique<ServoBridge>(*this);
 }
 
@@ -224,7 +229,8 @@ uhaptics::Fault cUhapticsDevice::renderChecked(const uhaptics::SceneInput& a_inp
   return fault;
 }
 
-void cUhapticsDevice::pushUserSideLocked(double a_time, const uhaptics::Vec3& a_asked) noexcept {
+void cUhapticsDevice::pushUserSideLocked(double a_time, const uhaptics::Vec3& a_asked,
+                                         const uhaptics::Vec3& a_seen) noexcept {
   if (m_referee) m_io->setSceneForce(m_policy->sceneForceAtUserPort(a_asked));
   if (!m_handEnabled) return;
   // The hand holds the device as it is (a damper on an encoder-differenced velocity would lag);
@@ -236,6 +242,21 @@ void cUhapticsDevice::pushUserSideLocked(double a_time, const uhaptics::Vec3& a_
     velocity = m_policy->modelToDeviceVector(modelVelocity);
   }
   m_io->setUserForce(m_policy->deviceToModelForce(m_hand->force(a_time, position, velocity)));
+  const double radius = m_specifications.m_workspaceRadius;
+  if (m_recorder && radius > 0.0 && m_recorder->due(a_time)) {
+    uhaptics::HandSample row;
+    row.time = a_time;
+    m_hand->anchor(a_time, row.anchor, row.anchor_velocity);
+    row.anchor /= radius;  // the hand's centre is the workspace centre, the device frame's origin
+    row.anchor_velocity /= radius;
+    const uhaptics::ScriptedHand::Grip grip = m_hand->grip(a_time);
+    row.stiffness = grip.stiffness;
+    row.damping = grip.damping;
+    row.max_force = grip.max_force;
+    row.scene_force = a_asked;
+    row.scene_position = a_seen / radius;
+    m_recorder->record(row);
+  }
 }
 
 void cUhapticsDevice::recordTickLocked(double a_force, uhaptics::Fault a_fault) noexcept {
@@ -261,6 +282,7 @@ bool cUhapticsDevice::open() {
     // subclass has filled in its specification.
     m_hand = std::make_unique<uhaptics::ScriptedHand>(m_hand->options(), m_specifications.m_workspaceRadius,
                                                       uhaptics::Vec3::Zero());
+    if (m_recorder) m_recorder->clear();  // the writer thread is stopped while closed
     m_io = makeJointIo();
     m_servoArmed.store(false);  // a board's servo thread sends zero until the policy is reset
     m_rateEstimator.setResolution(m_io->spec().position_resolution.data(), m_joints);
@@ -359,6 +381,11 @@ bool cUhapticsDevice::close() {
   }
   stopStatsWriter();
   writeStats(m_statsPath);
+  writeHandRecording();
+  if (m_recorder && m_recorder->dropped() > 0) {
+    std::fprintf(stderr, "uhaptics: the hand recording %s holds the first %.0f s; %zu later rows did not fit\n",
+                 m_recordPath.c_str(), kHandRecordingSeconds, m_recorder->dropped());
+  }
   return C_SUCCESS;
 }
 
@@ -441,7 +468,7 @@ void cUhapticsDevice::tickLocked() noexcept {
     fault = renderChecked(input);
     m_io->command(m_efforts.data());
   }
-  pushUserSideLocked(t, reading && sendForce ? m_commandForce : uhaptics::Vec3::Zero());
+  pushUserSideLocked(t, reading && sendForce ? m_commandForce : uhaptics::Vec3::Zero(), seen);
   const uhaptics::Fault backend = m_io->advance(m_servoPeriod);
   if (fault == uhaptics::Fault::kNone) fault = backend;
   // The simulation moved only now: sense its new state, which the application reads next.
@@ -473,6 +500,7 @@ void cUhapticsDevice::servoTick(const uhaptics::DeviceSnapshot& a_snapshot, doub
   uhaptics::Fault fault = uhaptics::Fault::kNone;
   double force = 0.0;
   uhaptics::Vec3 asked = uhaptics::Vec3::Zero();  // what the scene asks now (nothing while stale)
+  uhaptics::Vec3 seen = m_state.position;          // and where it saw the tool
   if (!stale) {
     uhaptics::SceneInput input;
     input.force = published ? uhaptics::Vec3(m_servoInput.force[0], m_servoInput.force[1], m_servoInput.force[2])
@@ -486,6 +514,7 @@ void cUhapticsDevice::servoTick(const uhaptics::DeviceSnapshot& a_snapshot, doub
     fault = renderChecked(input);
     force = input.force.norm();
     asked = input.force;
+    seen = input.seen_position;
     m_staleTicks = 0;
     m_heldEfforts = m_efforts;
   } else {
@@ -497,7 +526,7 @@ void cUhapticsDevice::servoTick(const uhaptics::DeviceSnapshot& a_snapshot, doub
     for (int i = 0; i < m_actuators; ++i) m_efforts[i] = scale * m_heldEfforts[i];
   }
   std::copy(m_efforts.begin(), m_efforts.begin() + m_actuators, a_efforts);
-  pushUserSideLocked(t, asked);
+  pushUserSideLocked(t, asked, seen);
   m_lastFault = fault;
   ++m_ticks;
   recordTickLocked(force, fault);
@@ -713,7 +742,7 @@ bool cUhapticsDevice::enableForces(bool a_value) {
 }
 
 void cUhapticsDevice::startStatsWriter() {
-  if (m_statsPath.empty()) return;
+  if (m_statsPath.empty() && !m_recorder) return;
   const std::string path = m_statsPath;  // the writer never reads members the app may change
   {
     std::lock_guard<std::mutex> lock(m_writerMutex);
@@ -724,6 +753,7 @@ void cUhapticsDevice::startStatsWriter() {
     while (!m_writerWake.wait_for(lock, std::chrono::milliseconds(500), [this] { return m_writerStop; })) {
       lock.unlock();
       writeStats(path);
+      writeHandRecording();  // also a killed process leaves its recording up to the last half second
       lock.lock();
     }
   });
@@ -743,6 +773,22 @@ void cUhapticsDevice::writeStats(const std::string& a_path) noexcept {
   try {
     uhaptics::writeFileAtomically(a_path, uhaptics::formatStatsJson(getSessionStats(), m_selection.device,
                                                                          m_selection.backend, getRendererName()));
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "uhaptics: %s\n", e.what());
+  }
+}
+
+void cUhapticsDevice::writeHandRecording() noexcept {
+  if (!m_recorder || m_recorder->count() < 2) return;
+  try {
+    uhaptics::HandRecording recording;
+    recording.workspace_radius = m_specifications.m_workspaceRadius;
+    recording.device = m_selection.device;
+    recording.backend = m_selection.backend;
+    const std::size_t rows = m_recorder->count();  // complete rows, never changed while the session runs
+    recording.dropped_rows = m_recorder->dropped();
+    recording.samples.assign(m_recorder->rows(), m_recorder->rows() + rows);
+    uhaptics::writeFileAtomically(m_recordPath, uhaptics::formatHandRecording(recording));
   } catch (const std::exception& e) {
     std::fprintf(stderr, "uhaptics: %s\n", e.what());
   }

@@ -28,6 +28,12 @@ bool parseSwitch(const std::string& value, const std::string& where) {
   throw Error(where + " = '" + value + "' must be on or off");
 }
 
+void followRecording(const std::string& path, ScriptedHandOptions& hand, bool& path_given) {
+  if (path.empty()) throw Error("the hand recording's path is empty");
+  hand.recording = std::make_shared<const HandRecording>(readHandRecording(path));
+  path_given = true;
+}
+
 void readHand(const ParamFile& config, ScriptedHandOptions& hand, bool& enabled, bool& path_given) {
   if (config.has("hand/enabled")) enabled = config.integer("hand/enabled", 0, 1) != 0;
   hand.lap_time = config.numberOr("hand/lap_time", hand.lap_time, 0.1, 3600.0);
@@ -41,6 +47,7 @@ void readHand(const ParamFile& config, ScriptedHandOptions& hand, bool& enabled,
     for (std::size_t i = 0; i < n; ++i) hand.waypoints.emplace_back(flat[3 * i], flat[3 * i + 1], flat[3 * i + 2]);
     path_given = true;
   }
+  if (config.has("hand/recording")) followRecording(config.text("hand/recording"), hand, path_given);
 }
 
 }  // namespace
@@ -80,6 +87,7 @@ DeviceSelection readDeviceSelection(const std::vector<std::string>& devices,
       requireOneOf(selection.backend, backends, config.origin() + ": selection/backend", "backend");
     }
     if (config.has("stats")) selection.stats_path = config.text("stats");
+    if (config.has("record")) selection.record_path = config.text("record");
     readHand(config, selection.hand, selection.hand_enabled, selection.hand_path_given);
     // The device classes read "options/<device>/<name>" when they are made.
     config.rejectUnreadKeys({"options"});
@@ -94,12 +102,20 @@ DeviceSelection readDeviceSelection(const std::vector<std::string>& devices,
   }
   if (const auto stats = env("UHAPTICS_STATS")) selection.stats_path = *stats;
   if (const auto hand = env("UHAPTICS_HAND")) selection.hand_enabled = parseSwitch(*hand, "UHAPTICS_HAND");
+  if (const auto record = env("UHAPTICS_RECORD")) selection.record_path = *record;
+  if (const auto recording = env("UHAPTICS_HAND_RECORDING")) {
+    followRecording(*recording, selection.hand, selection.hand_path_given);
+  }
   if (selection.device.empty()) {
     throw Error("no device selected: set UHAPTICS_DEVICE to one of: " + joined(devices) +
                 " (or name it in the UHAPTICS_CONFIG file under selection/device)");
   }
   // A real user holds real hardware; the scripted hand moves the simulated and the emulated device.
   if (selection.backend == "usb") selection.hand_enabled = false;
+  if (!selection.record_path.empty() && !selection.hand_enabled) {
+    throw Error("UHAPTICS_RECORD = '" + selection.record_path + "': a hand recording records the scripted hand, which is "
+                "off (backend " + selection.backend + (selection.backend == "usb" ? ")" : ", UHAPTICS_HAND off)"));
+  }
   return selection;
 }
 

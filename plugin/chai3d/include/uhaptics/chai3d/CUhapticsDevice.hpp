@@ -41,6 +41,11 @@
 // Statistics (session_stats.hpp): recorded by whichever thread ticks, optionally written to a file
 // every half second and on close, so even a killed process leaves a recent record.
 //
+// Hand recording (DeviceSelection::record_path; docs/recording.md): the scripted hand's side of the
+// session (its anchor, grip and force limit, the scene's force and the position it was computed
+// from) at kHandRecordingRate into a buffer allocated when the device is made, written with the
+// statistics. A full buffer keeps the first kHandRecordingSeconds and counts the rows it drops.
+//
 // Referee (option "referee", default 1 on sim and emulated; usb has none): the simulated plant is
 // judged from its truth (uhaptics::Referee, referee.hpp): true penetration, rendered stiffness,
 // rate-hardness, applied against asked force, energy given to the user, chatter, saturation. Each
@@ -98,6 +103,12 @@ class cUhapticsDevice : public cGenericHapticDevice {
   /// Board backends: periods over which the efforts ramp to zero once the application's input is
   /// stale (10 ms at 1 kHz).
   static constexpr int kStaleRampPeriods = 10;
+  /// Rows a second of a hand recording: the hand's anchor moves smoothly (straight segments at
+  /// constant speed), so linear interpolation between rows 10 ms apart misses it only within 10 ms
+  /// of a corner, and a 10 s scene is about 100 kB, small enough to ship with the tests.
+  static constexpr double kHandRecordingRate = 100.0;  // [Hz]
+  /// The longest hand recording kept (its buffer: about 7 MB).
+  static constexpr double kHandRecordingSeconds = 600.0;  // [s]
 
   virtual ~cUhapticsDevice();
   cUhapticsDevice(const cUhapticsDevice&) = delete;
@@ -280,7 +291,8 @@ class cUhapticsDevice : public cGenericHapticDevice {
   uhaptics::Fault renderChecked(const uhaptics::SceneInput& a_input) noexcept;
   /// The user's side of a tick on the simulated or emulated plant: the scene's force a_asked (device
   /// frame) to the referee, and the scripted hand's force, from the true state where the plant has it.
-  void pushUserSideLocked(double a_time, const uhaptics::Vec3& a_asked) noexcept;
+  /// a_seen: the position the scene computed a_asked from (for the hand recording).
+  void pushUserSideLocked(double a_time, const uhaptics::Vec3& a_asked, const uhaptics::Vec3& a_seen) noexcept;
   void recordTickLocked(double a_force, uhaptics::Fault a_fault) noexcept;
   void commandZeroLocked() noexcept;
   // Board backends, servo thread.
@@ -299,6 +311,8 @@ class cUhapticsDevice : public cGenericHapticDevice {
   void startStatsWriter();
   void stopStatsWriter() noexcept;
   void writeStats(const std::string& a_path) noexcept;
+  /// The hand recording's rows so far to m_recordPath (nothing before two rows).
+  void writeHandRecording() noexcept;
 
   std::mutex m_mutex;  // the policy's: held by the thread that ticks and by subclass accessors
   std::unique_ptr<uhaptics::DevicePolicy> m_policy;  // setPolicy(); the passivity layer when on
@@ -318,6 +332,8 @@ class cUhapticsDevice : public cGenericHapticDevice {
   bool m_forcesEnabled = true;
   bool m_handEnabled;
   std::unique_ptr<uhaptics::ScriptedHand> m_hand;
+  const std::string m_recordPath;                  // DeviceSelection::record_path; empty: none
+  std::unique_ptr<uhaptics::HandRecorder> m_recorder;  // made with the device when m_recordPath is set
   const int m_joints, m_actuators;
   std::unique_ptr<uhaptics::JointIo> m_io;  // every backend; opened in open(), closed in close()
   std::array<double, uhaptics::wire::kMaxChannels> m_positions{}, m_rates{}, m_efforts{};

@@ -8,11 +8,16 @@
 //   UHAPTICS_CONFIG   path of a JSON file (format below)
 //   UHAPTICS_STATS    where the device writes its session statistics (default: none)
 //   UHAPTICS_HAND     on (default with sim) / off: the scripted hand that moves the simulated device
+//   UHAPTICS_RECORD   where the device writes the scripted hand's side of the session, a hand
+//                     recording (docs/recording.md); needs the scripted hand (sim or emulated)
+//   UHAPTICS_HAND_RECORDING  a hand recording the scripted hand follows instead of its waypoints,
+//                     grip and force limit
 //
 // Config file ("device": "chai3d-selection", "format_version": 1):
 //   {"selection": {"device": "tau", "backend": "sim"}, "stats": "/tmp/tau.json",
+//    "record": "/tmp/tau-hand.csv",
 //    "hand": {"enabled": 1, "lap_time": 4, "stiffness": 150, "damping": 4, "max_force": 8,
-//             "waypoint_count": 2, "waypoints": [0,0,0.5, 0,0,-0.3]},
+//             "waypoint_count": 2, "waypoints": [0,0,0.5, 0,0,-0.3], "recording": "hand.csv"},
 //    "options": {"<device>": {"<option>": value, ...}}}  (device-specific renderer options)
 #include <functional>
 #include <map>
@@ -31,10 +36,12 @@ struct DeviceSelection {
   std::string device;
   std::string backend = "sim";
   std::string stats_path;        // empty: no stats file
+  std::string record_path;       // empty: no hand recording
   bool hand_enabled = true;      // only meaningful with the sim backend
   ScriptedHandOptions hand;
-  /// The configuration named the hand's waypoints (a path chosen for a scene). Position-driven
-  /// devices (the exoskeleton's finger) then follow the path instead of their own default motion.
+  /// The configuration named the hand's waypoints or a recording (a path chosen for a scene).
+  /// Position-driven devices (the exoskeleton's finger) then follow it instead of their own default
+  /// motion.
   bool hand_path_given = false;
   std::optional<ParamFile> config;  // for device-specific options ("options/<device>/<name>")
   std::map<std::string, double> options;  // device options set in code; win over the config file
