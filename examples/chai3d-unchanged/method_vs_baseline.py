@@ -11,7 +11,10 @@ factor]} holds when method op factor x baseline (e.g. the TAU's true depth <= 0.
 "versus_baseline_why" says why, or why a scene has none.
 
   method_vs_baseline.py --bin DIR --out DIR [--example NAME ...] [--device NAME ...]
-                        [--backend sim|emulated ...] [--seconds S]
+                        [--backend sim|emulated ...] [--seconds S] [--hand-recordings DIR]
+
+With --hand-recordings (e.g. tests/recordings) a scene and device with a recording there
+(<example>.<device>.csv, docs/recording.md) replays it in both runs instead of re-scripting the hand.
 
 Writes to --out: method_vs_baseline.csv (one row per device, scene, backend and figure),
 summary.txt (the table), reproduction.csv (one row per claim, for uhaptics-report) and
@@ -54,6 +57,8 @@ def run(args, backend, method_off, out):
         command += ["--device", d]
     if args.seconds:
         command += ["--seconds", str(args.seconds)]
+    if args.hand_recordings:
+        command += ["--hand-recordings", args.hand_recordings]
     if method_off:
         command.append("--method-off")
     print(f"method_vs_baseline.py: {backend}, {'baseline' if method_off else 'method'}: running", flush=True)
@@ -111,7 +116,8 @@ def write(out, table, rows, claims):
         cells = {r["figure"]: r for r in rows if (r["device"], r["example"], r["backend"]) == (device, example, backend)}
         pair = " ".join(f"{fmt(cells[n]['method']) + ' / ' + fmt(cells[n]['baseline']):>16}" for n, _ in FIGURES)
         lines.append(f"{device + ', ' + example + ', ' + backend:<32} {pair}")
-    lines.append("(each cell: method / baseline, the same scripted hand; units: mm, N/m, N, mJ, N, share)")
+    lines.append("(each cell: method / baseline, the same hand, scripted or replayed from a recording; "
+                 "units: mm, N/m, N, mJ, N, share)")
     for device, example, backend in keys:
         why = scene_entry(table, example, device, backend).get("versus_baseline_why")
         if why:
@@ -169,6 +175,7 @@ def main():
     parser.add_argument("--device", action="append", help="devices (default: every device with a method_off)")
     parser.add_argument("--backend", action="append", help="sim and/or emulated (default: both)")
     parser.add_argument("--seconds", type=float, help="run time of each example (default: the table's)")
+    parser.add_argument("--hand-recordings", help="folder of hand recordings to replay (<example>.<device>.csv)")
     args = parser.parse_args()
     table = run_examples.load_table(run_examples.TABLE, args.bin)
     args.example = args.example or DEFAULT_SCENES

@@ -10,6 +10,10 @@ each device's devices/<folder>/chai3d/dropin.json what it must show in each scen
   run_examples.py ... --method-off                      (the device's dropin.json "method_off" options
                                                          switch its paper's method off: the scene's rule
                                                          must fail, the run otherwise hold)
+  run_examples.py ... --record DIR                      (each run writes its scripted hand's side to
+                                                         DIR/<example>.<device>.csv: docs/recording.md)
+  run_examples.py ... --hand-recordings DIR             (a run whose DIR/<example>.<device>.csv exists
+                                                         replays that hand instead of the scene's path)
 
 Each run: the example starts with UHAPTICS_DEVICE, UHAPTICS_STATS and UHAPTICS_CONFIG (the
 scripted hand's path for that scene) in its environment and is ended after its time (the examples
@@ -143,7 +147,25 @@ def hand_config(table, example, device):
     if waypoints is not None:
         config["hand"]["waypoint_count"] = len(waypoints)
         config["hand"]["waypoints"] = [c for point in waypoints for c in point]
+    recording = hand_recording(example, device)
+    if recording:
+        config["hand"]["recording"] = recording
+    if ARGS.record:
+        config["record"] = os.path.join(ARGS.record, recording_name(example, device))
     return config
+
+
+def recording_name(example, device):
+    """The file a scene's hand recording with a device has (docs/recording.md)."""
+    return f"{example['name']}.{device}.csv"
+
+
+def hand_recording(example, device):
+    """The recording this run replays (--hand-recordings), None for the scene's scripted path."""
+    if not ARGS.hand_recordings:
+        return None
+    path = os.path.join(ARGS.hand_recordings, recording_name(example, device))
+    return path if os.path.exists(path) else None
 
 
 def figure(stats, name):
@@ -391,12 +413,20 @@ def main():
     parser.add_argument("--reject", action="store_true", help="expect the selection to be refused")
     parser.add_argument("--seconds", type=float, help="run time of each example (default: the table's)")
     parser.add_argument("--option", action="append", help="a device option DEVICE/NAME=VALUE (repeatable)")
+    parser.add_argument("--record", help="folder: each run records its hand there (<example>.<device>.csv)")
+    parser.add_argument("--hand-recordings",
+                        help="folder of hand recordings (<example>.<device>.csv): a run with one replays it")
     parser.add_argument("--method-off", action="store_true",
                         help="the device's method switched off (its dropin.json \"method_off\" options): "
                              "its scene rule must fail")
     global ARGS
     ARGS = parser.parse_args()
     ARGS.bin = os.path.abspath(ARGS.bin)
+    for folder in ("record", "hand_recordings"):
+        if getattr(ARGS, folder):
+            setattr(ARGS, folder, os.path.abspath(getattr(ARGS, folder)))
+    if ARGS.record:
+        os.makedirs(ARGS.record, exist_ok=True)
     table = load_table(ARGS.table, ARGS.bin)
     examples = {e["name"]: e for e in table["examples"]}
     chosen = ARGS.example or list(examples)
@@ -413,7 +443,9 @@ def main():
             results.append(result)
             verdict = "ok" if not result["problems"] else "FAIL: " + "; ".join(result["problems"])
             stats = result["stats"] or {}
-            print(f"{name} with {device} ({ARGS.backend}, expect {result['expect']}): {verdict}")
+            replayed = hand_recording(examples[name], device)
+            print(f"{name} with {device} ({ARGS.backend}, expect {result['expect']}"
+                  f"{', replaying ' + replayed if replayed else ''}): {verdict}")
             if stats:
                 print(f"  {stats['ticks']} ticks at {stats['rate_hz']:.0f} Hz, {stats['contacts']} contacts, "
                       f"peak {stats['peak_force_N']:.2f} N, renderer {stats['renderer']}; {describe(result)}; "

@@ -135,6 +135,26 @@ def hand_picked(tools):
             ("bad interval", {"out/x/reproduction.csv": ROWS_HEADER + good.replace("[1, 1]", "[2, 1]")}, "row 1"),
         ]:
             cases.append((t, ["--out", "{cwd}/out"], expect, files))
+    if "uhaptics-replay" in by_name:
+        t = by_name["uhaptics-replay"]
+        header = ("# uhaptics hand recording\n# format_version: 1\n# workspace_radius_m: 0.025\n"
+                  "time_s,anchor_x,anchor_y,anchor_z,anchor_vx,anchor_vy,anchor_vz,grip_stiffness_N_per_m,"
+                  "grip_damping_N_s_per_m,grip_max_force_N,scene_fx_N,scene_fy_N,scene_fz_N,scene_x,scene_y,scene_z\n")
+        row = "0,0,0,0.5,0,0,-0.75,1500,20,12,0,0,0,0,0,0.5\n"
+        good = header + row + row.replace("0,", "0.01,", 1)
+        run = ["--program", "{cwd}/program", "--recording", "{cwd}/hand.csv", "--device"]
+        tau = ["tau"]
+        for what, recording, extra, expect in [
+            ("wrong version", header.replace("version: 1", "version: 9"), tau, "hand.csv:2: format_version"),
+            ("one row", header + row, tau, "hand.csv:5: rows"),
+            ("bad grip", header + row + row.replace("1500", "-1").replace("0,", "0.01,", 1), tau,
+             "hand.csv:6: grip_stiffness_N_per_m"),
+            ("unknown device", good, ["no-such-device"], "no-such-device"),
+            ("bad check", good, tau + ["--expect", "method.max_true_penetration_mm~1"], "--expect"),
+            ("baseline check without the baseline", good, tau + ["--expect", "baseline.chatter_N<1"], "--baseline"),
+            ("bad device option", good, tau + ["--option", "wall"], "--option"),
+        ]:
+            cases.append((t, run + extra, expect, {"program": "#!/bin/sh\n", "hand.csv": recording}))
     return cases
 
 
