@@ -108,6 +108,7 @@ TEST_CASE("hand recording options: record and replay, refused where they cannot 
   REQUIRE(s.hand.recording);
   CHECK(s.hand.recording->samples.size() == 2);
   CHECK(s.hand_path_given);  // a position-driven device follows the recorded hand
+  CHECK(s.hand.lap_time == Approx(0.01));  // and repeats the whole recording
   // Recording needs the scripted hand.
   env.values["UHAPTICS_HAND"] = "off";
   CHECK_THROWS_WITH(readDeviceSelection(kDevices, kBackends, env.lookup()),

@@ -31,6 +31,8 @@ bool parseSwitch(const std::string& value, const std::string& where) {
 void followRecording(const std::string& path, ScriptedHandOptions& hand, bool& path_given) {
   if (path.empty()) throw Error("the hand recording's path is empty");
   hand.recording = std::make_shared<const HandRecording>(readHandRecording(path));
+  // A position-driven device repeats the hand's path every lap: the recording is one lap.
+  hand.lap_time = hand.recording->duration();
   path_given = true;
 }
 

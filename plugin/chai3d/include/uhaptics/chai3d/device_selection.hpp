@@ -41,7 +41,7 @@ struct DeviceSelection {
   ScriptedHandOptions hand;
   /// The configuration named the hand's waypoints or a recording (a path chosen for a scene).
   /// Position-driven devices (the exoskeleton's finger) then follow it instead of their own default
-  /// motion.
+  /// motion, repeating it every hand.lap_time (a recording's duration when it names one).
   bool hand_path_given = false;
   std::optional<ParamFile> config;  // for device-specific options ("options/<device>/<name>")
   std::map<std::string, double> options;  // device options set in code; win over the config file
