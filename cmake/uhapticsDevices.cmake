@@ -65,7 +65,10 @@ endfunction()
 #   ${UHAPTICS_UDEV_RULES} (<build>/share/uhaptics/udev/99-uhaptics.rules): one rule per registered
 #     device's parameter file that has a "usb" section, with its vendor_id and product_id.
 #
-# The last two are installed to <prefix>/share/uhaptics/{params,udev}.
+#   ${UHAPTICS_DROPIN_DIR} (<build>/share/uhaptics/dropin): each registered device's
+#     chai3d/dropin.json as <device>.json.
+#
+# The last three are installed to <prefix>/share/uhaptics/{params,udev,dropin}.
 function(uhaptics_assemble_device_files)
   get_property(folders GLOBAL PROPERTY UHAPTICS_DEVICE_FOLDERS)
   get_property(devices GLOBAL PROPERTY UHAPTICS_DEVICE_NAMES)
@@ -97,6 +100,25 @@ function(uhaptics_assemble_device_files)
     get_filename_component(name "${copy}" NAME)
     if(NOT name IN_LIST names)
       file(REMOVE_RECURSE "${copy}")
+    endif()
+  endforeach()
+
+  # What each registered device must show in CHAI3D's unchanged examples (its chai3d/dropin.json:
+  # rules, and the method_off options that give its paper's baseline), as <device>.json, so an
+  # installed tool (uhaptics-replay's --baseline) reads it from the prefix.
+  file(MAKE_DIRECTORY "${UHAPTICS_DROPIN_DIR}")
+  set(dropins "")
+  foreach(folder device IN ZIP_LISTS folders devices)
+    set(source "${PROJECT_SOURCE_DIR}/devices/${folder}/chai3d/dropin.json")
+    if(EXISTS "${source}")
+      configure_file("${source}" "${UHAPTICS_DROPIN_DIR}/${device}.json" COPYONLY)
+      list(APPEND dropins "${device}.json")
+    endif()
+  endforeach()
+  file(GLOB copies RELATIVE "${UHAPTICS_DROPIN_DIR}" "${UHAPTICS_DROPIN_DIR}/*")
+  foreach(copy IN LISTS copies)
+    if(NOT copy IN_LIST dropins)
+      file(REMOVE_RECURSE "${UHAPTICS_DROPIN_DIR}/${copy}")
     endif()
   endforeach()
 
@@ -172,5 +194,7 @@ function(uhaptics_assemble_device_files)
   install(DIRECTORY "${UHAPTICS_PARAMS_DIR}/" DESTINATION ${CMAKE_INSTALL_DATADIR}/uhaptics/params
           COMPONENT uhaptics_data)
   install(FILES "${UHAPTICS_UDEV_RULES}" DESTINATION ${CMAKE_INSTALL_DATADIR}/uhaptics/udev
+          COMPONENT uhaptics_data)
+  install(DIRECTORY "${UHAPTICS_DROPIN_DIR}/" DESTINATION ${CMAKE_INSTALL_DATADIR}/uhaptics/dropin
           COMPONENT uhaptics_data)
 endfunction()

@@ -1,6 +1,6 @@
 # ctest: cmake -DBUILD=<build> -DPREFIX=<scratch prefix> -DDATADIR=<share> -P install_data.cmake
 # Installs the component holding the parameter folder and the udev rules into PREFIX and checks that
-# the installation has exactly the build's files (<build>/share/uhaptics/{params,udev}).
+# the installation has exactly the build's files (<build>/share/uhaptics/{params,udev,dropin}).
 file(REMOVE_RECURSE "${PREFIX}")
 execute_process(COMMAND "${CMAKE_COMMAND}" --install "${BUILD}" --prefix "${PREFIX}" --component uhaptics_data
                 RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE out)
@@ -9,7 +9,7 @@ if(NOT rc EQUAL 0)
 endif()
 
 set(failures "")
-foreach(folder params udev)
+foreach(folder params udev dropin)
   file(GLOB built RELATIVE "${BUILD}/share/uhaptics/${folder}" "${BUILD}/share/uhaptics/${folder}/*")
   file(GLOB installed RELATIVE "${PREFIX}/${DATADIR}/uhaptics/${folder}" "${PREFIX}/${DATADIR}/uhaptics/${folder}/*")
   if(NOT built)
@@ -32,4 +32,4 @@ endif()
 if(failures)
   message(FATAL_ERROR "${failures}")
 endif()
-message(STATUS "installed ${PREFIX}/${DATADIR}/uhaptics/{params,udev}: as built")
+message(STATUS "installed ${PREFIX}/${DATADIR}/uhaptics/{params,udev,dropin}: as built")

@@ -38,6 +38,7 @@
 #include <vector>
 
 #include "uhaptics/backends/device_definition.hpp"
+#include "uhaptics/backends/params_location.hpp"
 #include "uhaptics/backends/hand_recording.hpp"
 #include "uhaptics/tools/cli.hpp"
 
@@ -109,21 +110,14 @@ std::map<std::string, double> parseOptions(const std::vector<std::string>& items
   return options;
 }
 
-// The device's dropin.json: --dropin, else the file the build compiled in for the device.
+// The device's dropin.json: --dropin, else <share>/uhaptics/dropin/<device>.json beside the parameter
+// folder (the build's, or the installed prefix's: cmake/uhapticsDevices.cmake assembles both).
 std::string dropinFile(const std::string& device, const std::string& given) {
   if (!given.empty()) return given;
-  std::stringstream map(UHAPTICS_DROPIN_FILES);
-  std::string entry;
-  while (std::getline(map, entry, ',')) {
-    const std::size_t eq = entry.find('=');
-    if (eq != std::string::npos && entry.substr(0, eq) == device) {
-      const std::string path = entry.substr(eq + 1);
-      if (std::filesystem::is_regular_file(path)) return path;
-      throw RunError(device + "'s dropin.json is not at " + path + " (the source tree this tool was built from): " +
-                     "name it with --dropin");
-    }
-  }
-  throw RunError("this build knows no dropin.json for device '" + device + "': name it with --dropin");
+  const std::filesystem::path path =
+      std::filesystem::path(uhaptics::defaultParamsDirectory()).parent_path() / "dropin" / (device + ".json");
+  if (std::filesystem::is_regular_file(path)) return path.string();
+  throw RunError("no drop-in rules for device '" + device + "' at " + path.string() + ": name its dropin.json with --dropin");
 }
 
 // The baseline's options: the device's dropin.json "method_off".
@@ -368,7 +362,7 @@ int main(int argc, char** argv) {
   cli.choice("--backend", backend, "Backend", {"sim", "emulated"})->capture_default_str();
   cli.texts("--option", option_items, "Device option NAME=VALUE for both runs (repeatable; docs/chai3d.md)");
   app.add_flag("--baseline", baseline, "Also run the device's baseline (its dropin.json method_off) on the recording");
-  cli.inputFile("--dropin", dropin, "The device's dropin.json (default: the source tree's devices/<folder>/chai3d)");
+  cli.inputFile("--dropin", dropin, "The device's dropin.json (default: <share>/uhaptics/dropin/<device>.json beside the parameter folder)");
   cli.outputFolder("--out", out, "Folder for the runs' statistics, configurations, logs and replay.csv")
       ->capture_default_str();
   cli.texts("--expect", expect_items,
