@@ -1,13 +1,15 @@
 #include "uhaptics/chai3d/CExoFingerDevice.hpp"
 
+#include <cmath>
+
 namespace chai3d {
 namespace {
 
 uhaptics::ExoFingerPolicy::Options policyOptions(const uhaptics::DeviceSelection& a_selection, double a_servoPeriod) {
   uhaptics::ExoFingerPolicy::Options options;
   options.coupling_stiffness = a_selection.option("coupling_stiffness", 1.0, 1e-3, 100.0);
-  options.method = a_selection.option("method", 0.0, 0.0, 1.0) == 1.0 ? uhaptics::ExoFingerPolicy::Method::kStandard
-                                                                      : uhaptics::ExoFingerPolicy::Method::kSubspaceProxy;
+  // 0, 1, 2: the order of ExoFingerPolicy::Method.
+  options.method = static_cast<uhaptics::ExoFingerPolicy::Method>(std::lround(a_selection.option("method", 0.0, 0.0, 2.0)));
   options.servo_period = a_servoPeriod;
   return options;
 }

@@ -14,7 +14,7 @@ constexpr int kGrid = 21;  // samples per finger joint when surveying the workin
 }  // namespace
 
 ExoFingerPolicy::ExoFingerPolicy(Model model, const Options& options, FigureRecorder& figures)
-    : model_(std::make_unique<const Model>(std::move(model))), figures_(figures), options_(options) {
+    : model_(std::make_unique<const Model>(std::move(model))), figures_(figures), options_(options), method_(options.method) {
   if (!(options.coupling_stiffness > 0.0) || !std::isfinite(options.coupling_stiffness) || !(options.servo_period > 0.0)) {
     throw Error("exo finger policy: coupling_stiffness and servo_period must be finite and > 0");
   }
@@ -43,21 +43,14 @@ ExoFingerPolicy::ExoFingerPolicy(Model model, const Options& options, FigureReco
     }
   }
   if (samples == 0) throw Error("exo finger: no configuration of the working range assembles");
-  lever_sq /= samples;
+  lever_sq_ = lever_sq / samples;
   tip_per_length /= samples;
-  tip_lever_sq /= samples;
+  tip_lever_sq_ = tip_lever_sq / samples;
   centre_ = 0.5 * (lo + hi);
   workspace_radius_ = 0.5 * (hi - lo).minCoeff();
   // Virtual work: F_tip |d tip| = F_act |d l_x|, on average over the working range.
   fingertip_force_ = m.effortLimits()(0) / tip_per_length;
-  fingertip_stiffness_ = options.coupling_stiffness / tip_lever_sq;
-
-  UnderactuatedGains<Model> gains;
-  gains.Zx = options.coupling_stiffness * Mat2::Identity();
-  gains.Zq = Model::ActuatorVector::Constant(options.coupling_stiffness * lever_sq).asDiagonal();  // Z_x seen at l_x
-  gains.force_limit = m.effortLimits();
-  subspace_ = std::make_unique<NonlinearSubspaceRenderer<Model>>(m, gains);
-  standard_ = std::make_unique<StandardRenderer<Model>>(m, gains);
+  setCouplingStiffness(options.coupling_stiffness);
 
   fig_contact_ticks_ = figures_.declareFigure("proxy_contact_ticks", FigureKind::kCount);
   fig_proxy_distance_ = figures_.declareFigure("max_proxy_distance_mm", FigureKind::kMaximum);
@@ -66,8 +59,27 @@ ExoFingerPolicy::ExoFingerPolicy(Model model, const Options& options, FigureReco
   fig_active_impedance_ = figures_.declareFigure("active_impedance_ticks", FigureKind::kCount);
 }
 
+void ExoFingerPolicy::setCouplingStiffness(double stiffness) {
+  if (!(stiffness > 0.0) || !std::isfinite(stiffness)) throw Error("exo finger policy: coupling_stiffness must be finite and > 0");
+  coupling_stiffness_ = stiffness;
+  fingertip_stiffness_ = stiffness / tip_lever_sq_;
+  actuator_stiffness_ = stiffness * lever_sq_;  // Z_x seen at l_x
+  UnderactuatedGains<Model> gains;
+  gains.Zx = stiffness * Mat2::Identity();
+  gains.Zq = Model::ActuatorVector::Constant(actuator_stiffness_).asDiagonal();
+  gains.force_limit = model_->effortLimits();
+  subspace_ = std::make_unique<NonlinearSubspaceRenderer<Model>>(*model_, gains);
+  standard_ = std::make_unique<StandardRenderer<Model>>(*model_, gains);
+  nullspace_ = std::make_unique<NullSpaceRenderer<Model>>(*model_, gains);
+}
+
 std::string ExoFingerPolicy::name() const {
-  return options_.method == Method::kStandard ? StandardRenderer<Model>::kName : NonlinearSubspaceRenderer<Model>::kName;
+  switch (method_) {
+    case Method::kStandard: return StandardRenderer<Model>::kName;
+    case Method::kNullSpace: return NullSpaceRenderer<Model>::kName;
+    case Method::kSubspaceProxy: break;
+  }
+  return NonlinearSubspaceRenderer<Model>::kName;
 }
 
 Vec2 ExoFingerPolicy::fingertip(const Model::TaskVector& x) const noexcept {
@@ -107,8 +119,7 @@ void ExoFingerPolicy::sense(const SensedJoints& reading, SensedState& state) noe
 }
 
 Fault ExoFingerPolicy::render(const SceneInput& input, double* efforts) noexcept {
-  const bool standard = options_.method == Method::kStandard;
-  const double Zx = options_.coupling_stiffness;
+  const double Zx = coupling_stiffness_;
   // The proxy pull in the finger plane (device y, z) -> hand frame -> finger-joint torque.
   const Vec2 f_hand = deviceToPlanar(input.force);
   const bool pulled = !f_hand.isZero(0.0);
@@ -125,8 +136,18 @@ Fault ExoFingerPolicy::render(const SceneInput& input, double* efforts) noexcept
   const bool solves = !(x_proxy - data_.x).isZero(0.0) && x_proxy.allFinite() && data_.q.allFinite() &&
                       data_.in_range && data_.x.allFinite() && data_.J.allFinite();
   // The sensed state's kinematics (sense()) are the renderer's: it evaluates the model only to solve.
-  const Fault fault = standard ? standard_->tick(data_.q, x_proxy, data_.x, data_.J, data_.in_range, actuator_)
-                               : subspace_->tick(data_.q, x_proxy, data_.x, data_.J, data_.in_range, actuator_);
+  Fault fault = Fault::kNone;
+  switch (method_) {
+    case Method::kStandard:
+      fault = standard_->tick(data_.q, x_proxy, data_.x, data_.J, data_.in_range, actuator_);
+      break;
+    case Method::kNullSpace:
+      fault = nullspace_->tick(data_.q, x_proxy, data_.x, data_.J, data_.in_range, actuator_);
+      break;
+    case Method::kSubspaceProxy:
+      fault = subspace_->tick(data_.q, x_proxy, data_.x, data_.J, data_.in_range, actuator_);
+      break;
+  }
   if (solves) {
     figures_.count(fig_solves_);
     const double distance = (fingertip(x_proxy) - data_.points.fingertip).norm();  // probe f(q) to proxy
@@ -138,7 +159,9 @@ Fault ExoFingerPolicy::render(const SceneInput& input, double* efforts) noexcept
       figures_.count(fig_contact_ticks_);
       // Passivity of what the method displays here: the symmetric part of d tau / d q must not
       // have a positive eigenvalue (relative to the impedance's size: rounding is not activity).
-      const Mat2 Z = standard ? standard_->displayedImpedance() : subspace_->displayedImpedance();
+      const Mat2 Z = method_ == Method::kStandard    ? standard_->displayedImpedance()
+                     : method_ == Method::kNullSpace ? nullspace_->displayedImpedance()
+                                                     : subspace_->displayedImpedance();
       const Mat2 symmetric = 0.5 * (Z + Z.transpose());
       const double trace = symmetric.trace(), det = symmetric.determinant();
       const double largest = 0.5 * trace + std::sqrt(std::max(0.0, 0.25 * trace * trace - det));

@@ -13,7 +13,8 @@
 // torque J_tip^T F, task proxy x_p = f(q) + Z_x^-1 J_tip^T F; the nonlinear subspace proxy
 // q* = argmin |x_p - f(q*)| then gives the actuator force Z_q S (q* - q). Only what the actuated
 // subspace can display is displayed, so the device stays passive (eq. 9) where projecting F directly
-// (the standard method, Method::kStandard) is not.
+// (the standard method, Method::kStandard) is not. The paper's other baseline, null-space force
+// optimization (Method::kNullSpace, eq. 3-5), renders the same pull for comparison.
 //
 // Figures (FigureRecorder):
 //   proxy_solves           periods in which the subspace proxy was solved (free space skips it: the
@@ -27,7 +28,7 @@
 //   active_impedance_ticks contact periods in which the displayed impedance d tau / d q of the method
 //                          running (its theoretical form at the finger's configuration: eq. 9,
 //                          -S^T Z_q S, for the subspace proxy; eq. 2, -S^T S J^T Z_x J, for the
-//                          standard method) has a positive eigenvalue in its symmetric part: the
+//                          standard method; eq. 5 for null-space optimization) has a positive eigenvalue in its symmetric part: the
 //                          device can return more energy than the proxy spring stored (paper 000,
 //                          Fig. 4). Zero with the subspace proxy; the standard method couples the
 //                          actuator to the sensed-only joint and goes active in parts of the range.
@@ -42,7 +43,8 @@ namespace uhaptics {
 class ExoFingerPolicy final : public DevicePolicy {
  public:
   using Model = ExoFingerModel;
-  enum class Method { kSubspaceProxy, kStandard };
+  /// The CHAI3D option "method": 0, 1, 2 in this order.
+  enum class Method { kSubspaceProxy, kStandard, kNullSpace };
   /// [N] a fingertip pull above this is a contact (the session statistics' contact threshold).
   static constexpr double kContactThreshold = 0.05;
 
@@ -67,6 +69,16 @@ class ExoFingerPolicy final : public DevicePolicy {
   Vec3 sceneForceAtUserPort(const Vec3& force) const noexcept override {
     return force.isZero(0.0) && finger_torque_.isZero(0.0) ? Vec3::Zero() : Vec3(scene_actuator_force_, 0.0, 0.0);
   }
+
+  /// Set-up, between sessions (an experiment's, e.g. paper 000's Fig. 4): the method the next
+  /// render() uses, and the coupling stiffness Z_x [N m/rad] with Z_q following it. A CHAI3D
+  /// device's specification keeps the constructor's. Throws Error for a stiffness not finite and > 0.
+  void setMethod(Method method) noexcept { method_ = method; }
+  Method method() const noexcept { return method_; }
+  void setCouplingStiffness(double stiffness);
+  double couplingStiffness() const noexcept { return coupling_stiffness_; }
+  /// Z_q [N/m]: the coupling stiffness seen at l_x, Z_x avg(|d x / d l_x|^2) over the working range.
+  double actuatorStiffness() const noexcept { return actuator_stiffness_; }
 
   const Model& model() const noexcept { return *model_; }
   /// The finger as last sensed (joints, finger angles x, phalanx points).
@@ -99,6 +111,10 @@ class ExoFingerPolicy final : public DevicePolicy {
   const Options options_;
   std::unique_ptr<NonlinearSubspaceRenderer<Model>> subspace_;
   std::unique_ptr<StandardRenderer<Model>> standard_;
+  std::unique_ptr<NullSpaceRenderer<Model>> nullspace_;
+  Method method_;
+  double coupling_stiffness_ = 0.0, actuator_stiffness_ = 0.0;
+  double lever_sq_ = 0.0, tip_lever_sq_ = 0.0;  // avg |d x / d l_x|^2 and avg |J_tip|_F^2 / 2 over the range
   ExoFingerData data_{*model_};
   Vec2 centre_ = Vec2::Zero();  // fingertip workspace centre, hand frame
   double workspace_radius_ = 0.0, fingertip_force_ = 0.0, fingertip_stiffness_ = 0.0;
