@@ -2,17 +2,24 @@
 //
 // A finger trajectory is played on the simulated device at the host rate, the proxy is held at
 // x = 0, and the standard, null-space, linearized-subspace and nonlinear-subspace renderers compute
-// the actuator force each frame. Written to --out: exo_fig4.csv (per frame), exo_fig4_summary.csv,
-// exo_fig4.png (joint angles, force, theoretical and finite-difference displayed impedance) and
-// reproduction.csv (the paper's checkable claims next to what we measure).
+// the actuator force each frame. Then the same motion runs through the exoskeleton's own policy (its
+// DevicePolicy factory, as the servo tool and CHAI3D run it) over the hardware path, each method
+// forward and backward, and the referee measures the energy it gave the finger (exo_fig4.hpp).
+// Written to --out: exo_fig4.csv (per frame), exo_fig4_summary.csv, exo_fig4_energy.csv, exo_fig4.png
+// (joint angles, force, theoretical and finite-difference displayed impedance) and reproduction.csv
+// (the paper's checkable claims next to what we measure).
 #include <CLI/CLI.hpp>
 #include <cstdio>
+#include <filesystem>
 #include <iostream>
 #include <string>
 
+#include "device_servo_renderers.hpp"
+#include "uhaptics/backends/board_catalog.hpp"
 #include "uhaptics/backends/params_location.hpp"
 #include "uhaptics/experiments/exo_fig4.hpp"
 #include "uhaptics/experiments/reproduction.hpp"
+#include "uhaptics/experiments/zwidth.hpp"  // kMaxZWidthDelay: the hardware path's longest delay
 #include "uhaptics/tools/cli.hpp"
 #include "uhaptics/tools/csv.hpp"
 #include "uhaptics/tools/plot.hpp"
@@ -49,12 +56,35 @@ int main(int argc, char** argv) {
   cli.number("--contact-amplitude", contact_deg, "contact variant: finger within +- this many deg of a "
                                                  "proxy held at MCP 45, PIP 50 deg", 0.5, 40.0)
       ->capture_default_str();
+  int command_delay = ServoLoop::kCommandDelayPeriods;
+  cli.integer("--command-delay", command_delay, "energy runs: periods between a reading and its command "
+                                                "(the board protocol: 1)", 0, experiments::kMaxZWidthDelay)
+      ->capture_default_str();
+  int force_loop_lag = 1;
+  cli.integer("--force-loop-lag", force_loop_lag, "energy runs: the board's force loop lags (1) or not (0)", 0, 1)
+      ->capture_default_str();
   if (const int status = cli.parse(argc, argv); status >= 0) return status;
   o.solver.method = method == "lm" ? LeastSquaresMethod::kLevenbergMarquardt : LeastSquaresMethod::kGaussNewton;
 
   try {
     const ExoFingerModel model = ExoFingerModel::load(params);
     const exo::Fig4Study study = exo::runFig4Study(model, o, contact_deg);
+    // The device's policy from its factory, on this parameter file.
+    DeviceDefinition device = findDevice("exo");
+    const std::filesystem::path params_path(params);
+    device.params_file = params_path.filename().string();
+    const std::string params_dir = params_path.parent_path().empty() ? "." : params_path.parent_path().string();
+    exo::Fig4EnergyOptions energy_options;
+    energy_options.spec = boardSpecFromFile(device, params);
+    energy_options.servo_period_s = 1.0 / energy_options.spec.servo_rate_hz;
+    energy_options.board_period_s = 1.0 / energy_options.spec.sample_rate_hz;
+    energy_options.command_delay = command_delay;
+    energy_options.force_loop_lag = force_loop_lag != 0;
+    energy_options.make_policy = [&] { return makeDevicePolicy(device, params_dir); };
+    const exo::Fig4Energy energy = exo::runFig4Energy(model, o, energy_options);
+    exo::Fig4EnergyOptions loop_options = energy_options;
+    loop_options.loop = true;
+    const exo::Fig4Energy loop = exo::runFig4Energy(model, o, loop_options);
     const exo::Fig4Result& r = study.protocol;
     const exo::Fig4Result& rc = study.contact;
     tools::ensureDirectory(out);
@@ -107,7 +137,34 @@ int main(int argc, char** argv) {
     std::printf("nonlinear solve: mean %.3f iterations per tick, max %d, max residual %.3g rad\n",
                 r.mean_nonlinear_iterations, r.max_nonlinear_iterations, r.max_nonlinear_residual);
 
-    const experiments::ReproductionTable table = exo::reproductionTable(study);
+    {
+      tools::CsvWriter csv(out + "/exo_fig4_energy.csv",
+                           {"motion: method", "generated_forward_mJ", "generated_backward_mJ", "field_work_mJ",
+                            "hold_share_mJ", "hold_closed_form_mJ", "fine_forward_mJ", "fine_backward_mJ",
+                            "stiffening_W", "max_abs_force_N", "faults"});
+      std::printf("energy given to the finger (referee, actuator port), policy through the hardware path: %.0f Hz, "
+                  "%d period(s) late, force loop %s; Z_x = %.4g N m/rad, Z_q = %.4g N/m; delta = %.3f ms\n",
+                  1.0 / energy.options.servo_period_s, energy.options.command_delay,
+                  energy.options.force_loop_lag ? "on" : "off", energy.zx, energy.zq, 1e3 * energy.delay_s);
+      for (const exo::Fig4Energy* run : {&energy, &loop}) {
+        const char* motion = run == &energy ? "fig4" : "loop";
+        std::printf("%s motion%s\n%-24s %12s %12s %12s %12s %14s\n", motion,
+                    run == &energy ? " (the path back retraces the path out)" : " (MCP and PIP at one period, the PIP a quarter cycle ahead)",
+                    "method", "forward", "backward", "field W", "hold share", "hold, delta S");
+        for (int m : exo::kPolicyMethods) {
+          const exo::Fig4MethodEnergy& e = run->methods[static_cast<std::size_t>(m)];
+          const double closed = e.holdClosedForm_mJ(run->delay_s);
+          csv.row(std::string(motion) + ": " + exo::methodName(m),
+                  {e.forward.generated_mJ, e.backward.generated_mJ, e.fieldWork_mJ(), e.holdShare_mJ(), closed,
+                   e.fine_forward.generated_mJ, e.fine_backward.generated_mJ, e.fine_forward.stiffening_W,
+                   e.forward.max_abs_force_N, double(e.forward.faults + e.backward.faults)});
+          std::printf("%-24s %9.4g mJ %9.4g mJ %9.4g mJ %9.4g mJ %11.4g mJ\n", exo::methodName(m),
+                      e.forward.generated_mJ, e.backward.generated_mJ, e.fieldWork_mJ(), e.holdShare_mJ(), closed);
+        }
+      }
+    }
+
+    const experiments::ReproductionTable table = exo::reproductionTable(study, &energy, &loop);
     table.writeCsv(out + "/reproduction.csv");
     std::cout << table.format();
     // The linearized form (eq. 8) is only reported for the Fig. 4 protocol (exo::reproductionTable).

@@ -5,14 +5,33 @@
 // and the finite-difference impedance Delta tau_a / Delta q_a between frames are recorded.
 // Impedances are normalized as in the paper: Z_q = zq, Z_x = zq / avg(|J_a|)^2 I. Also the paper's
 // claims with the checks against them (reproductionTable).
+//
+// The energy part (runFig4Energy) runs the product instead: the exoskeleton's DevicePolicy, made by
+// the device's factory, on the same motion through the hardware path (the board's sensors and rate
+// estimator, the command a period late, the board's force loop), with the proxy held at x = 0 by a
+// scene that pulls the finger joints with Z_x (0 - x) from the sensed x; the energy it gives the
+// finger is the referee's (referee.hpp), from the plant's truth at the actuator. A force sampled and
+// held, and lagging, does work a field does not: along the path it acts delta late, delta = (d + 1/2) T
+// (d periods of command delay, half a period of hold) plus the force loop's delay, so to first order
+//   E = W + delta S,   S = -integral of (dF/dt)(dl_x/dt) dt
+// where W is the work of the method's own field F(q) (zero for the subspace proxy's spring in l_x over
+// a closed motion; a loop integral for the standard method, whose field is not a gradient in l_x)
+// and S > 0 wherever F stiffens against the motion (for a spring K: S = K integral of v^2). The same
+// path traced backward flips W and keeps S, so (E_forward - E_backward) / 2 is W and
+// (E_forward + E_backward) / 2 the sampled hold's share, which delta S predicts.
 #include <array>
+#include <cstdint>
+#include <functional>
+#include <memory>
 #include <string>
 #include <vector>
 
+#include "uhaptics/backends/device_definition.hpp"
 #include "uhaptics/backends/exo_finger_sim.hpp"
 #include "uhaptics/core/subspace_proxy_solver.hpp"
 #include "uhaptics/experiments/reproduction.hpp"
 #include "uhaptics/models/exo_finger_model.hpp"
+#include "uhaptics/renderers/device_policy.hpp"
 
 namespace uhaptics::exo {
 
@@ -88,7 +107,74 @@ struct Fig4Study {
 /// Runs both; throws uhaptics::Error like runFig4.
 Fig4Study runFig4Study(const ExoFingerModel& model, const Fig4Options& options, double contact_amplitude_deg);
 
-/// Paper 000's claims on Fig. 4 (eq. 2, 5, 6, 8, 9) next to what the study measured.
-experiments::ReproductionTable reproductionTable(const Fig4Study& study);
+/// The Fig. 4 motion through the device's policy, judged by the referee (see the top of this file).
+struct Fig4EnergyOptions {
+  /// The device's DevicePolicy factory (tools/servo's makeDevicePolicy for the exoskeleton): it must
+  /// make an ExoFingerPolicy. spec: its board (sensor resolution, effort limits).
+  std::function<std::unique_ptr<DevicePolicy>()> make_policy;
+  BoardSpec spec;
+  double servo_period_s = 0.002;  // the USB exchange (paper 000: 500 Hz)
+  double board_period_s = 0.001;  // the plant's step: the board samples at 1 kHz
+  int command_delay = 1;          // periods between a reading and its command (ServoLoop::kCommandDelayPeriods)
+  bool force_loop_lag = true;     // the board's force loop (the model's time constant)
+  /// Without a trajectory file: false, the Fig. 4 motion (FingerTrajectory::synthesized: MCP and PIP
+  /// raised cosines of periods P and 2P/3 from rest, whose path back retraces the path out, so it
+  /// encloses no area in (l_x, q_B)); true, a loop over the same ranges: both joints at period P,
+  /// the PIP a quarter cycle ahead, so the finger's angles go round an ellipse.
+  bool loop = false;
+  /// The reference: a servo period this short, no delay, no lag, leaves the field's own work W and
+  /// a hold of delta = T / 2, a few thousandths of the product's.
+  double fine_period_s = 5e-5;
+};
+
+/// The methods the policy renders (ExoFingerPolicy::Method), by this file's Method.
+inline constexpr std::array<int, 3> kPolicyMethods = {kSubspaceNonlinear, kStandard, kNullSpace};
+
+/// One run of the policy along the path.
+struct Fig4EnergyRun {
+  double generated_mJ = 0.0;    // the referee's generated_energy_mJ
+  double stiffening_W = 0.0;    // S = -sum Delta F Delta l_x / T over the commanded force [W]
+  double max_abs_force_N = 0.0; // largest |command|
+  std::uint64_t faults = 0;     // periods with a fault or a non-finite command (sent as zero)
+};
+
+struct Fig4MethodEnergy {
+  Fig4EnergyRun forward, backward;            // the product's rate, delay and force loop
+  Fig4EnergyRun fine_forward, fine_backward;  // fine_period_s, no delay, no lag
+  /// W, the field's own work along the forward path: (E_forward - E_backward) / 2 of the fine runs.
+  double fieldWork_mJ() const { return 0.5 * (fine_forward.generated_mJ - fine_backward.generated_mJ); }
+  /// The sampled hold's share at the product's rate, measured: (E_forward + E_backward) / 2.
+  double holdShare_mJ() const { return 0.5 * (forward.generated_mJ + backward.generated_mJ); }
+  /// The same share in closed form: delta S (S of the fine forward run).
+  double holdClosedForm_mJ(double delta_s) const { return 1e3 * delta_s * fine_forward.stiffening_W; }
+};
+
+struct Fig4Energy {
+  Fig4EnergyOptions options;
+  double zx = 0.0;        // the policy's coupling stiffness, the paper's Z_x [N m/rad]
+  double zq = 0.0;        // the policy's Z_q [N/m] (Z_x avg |J_a|^2 over the working range)
+  double delay_s = 0.0;   // delta at the product's rate
+  double closure_rad = 0.0;  // |x(end) - x(start)|: 0 for a closed motion
+  std::array<Fig4MethodEnergy, kMethodCount> methods{};  // filled for kPolicyMethods
+};
+
+/// The effective delay delta [s], as the referee reads it, of a command computed at period T from a
+/// reading d periods old and held: without a force loop (tau = 0) (d + 1/2) T. Through the board's
+/// first-order force loop (time constant tau >> h, stepped at h), which smooths the held steps:
+/// d T + h / 2 + h / (exp(h / tau) - 1), about d T + tau. That is T / 2 - h / 2 short of the force's
+/// delay within the period (d T + T / 2 + the lag) because the referee holds each period's closing
+/// force over the whole period, and a lagging force closes the period fresher than it acted.
+double heldForceDelay(double servo_period, int command_delay, double board_period, double force_loop_tau) noexcept;
+
+/// Runs the policy's three methods along the study's motion (synthesized as options.duration_s /
+/// period_s, or options.trajectory_csv) forward and backward, with Z_x = zq / avg(|J_a|)^2 as in the
+/// protocol. Throws uhaptics::Error for bad options, a trajectory like runFig4, or a factory that does
+/// not make the exoskeleton's policy.
+Fig4Energy runFig4Energy(const ExoFingerModel& model, const Fig4Options& options, const Fig4EnergyOptions& energy);
+
+/// Paper 000's claims on Fig. 4 (eq. 2, 5, 6, 8, 9) next to what the study measured; with the energy
+/// runs (the Fig. 4 motion, pip_phase_rad 0, and the loop, pi / 2), the referee's generated energy.
+experiments::ReproductionTable reproductionTable(const Fig4Study& study, const Fig4Energy* fig4_motion = nullptr,
+                                                 const Fig4Energy* loop = nullptr);
 
 }  // namespace uhaptics::exo
