@@ -1,15 +1,17 @@
 // Paper 000's Fig. 4 motion through the exoskeleton's own policy (its DevicePolicy factory, the
 // hardware path's sensing, command delay and force loop), judged by the referee from the plant's
 // truth: the energy each method gives the finger, split into the field's own work and the sampled
-// hold's share (exo_fig4.hpp).
+// hold's share (exo_fig4.hpp); and the policy's set-up choices the experiment makes (method, Z_x).
 #include <catch2/catch.hpp>
 #include <cmath>
+#include <memory>
 
 #include "device_servo_renderers.hpp"
 #include "params.hpp"
 #include "renderer_fixtures.hpp"
 #include "uhaptics/backends/board_catalog.hpp"
 #include "uhaptics/experiments/exo_fig4.hpp"
+#include "uhaptics/renderers/exo_finger_policy.hpp"
 
 using namespace uhaptics;
 
@@ -139,4 +141,21 @@ TEST_CASE("Fig. 4 loop, referee: the baselines' fields do work round it, positiv
     CHECK(r.backward.generated_mJ - hold > 10.0 * hold);
     CHECK(r.forward.generated_mJ < 0.0);
   }
+}
+
+TEST_CASE("the exoskeleton's policy from its factory: method and coupling stiffness are set-up choices") {
+  std::unique_ptr<DevicePolicy> made = makeDevicePolicy(findDevice("exo"), test::paramsDir());
+  auto* policy = dynamic_cast<ExoFingerPolicy*>(made.get());
+  REQUIRE(policy != nullptr);
+  CHECK(policy->method() == ExoFingerPolicy::Method::kSubspaceProxy);  // the product's default
+  CHECK(policy->name() == NonlinearSubspaceRenderer<ExoFingerModel>::kName);
+  policy->setMethod(ExoFingerPolicy::Method::kNullSpace);
+  CHECK(policy->name() == NullSpaceRenderer<ExoFingerModel>::kName);
+  policy->setMethod(ExoFingerPolicy::Method::kStandard);
+  CHECK(policy->name() == StandardRenderer<ExoFingerModel>::kName);
+  // Z_q is Z_x seen at the actuator: it scales with Z_x.
+  const double zq = policy->actuatorStiffness();
+  policy->setCouplingStiffness(2.0 * policy->couplingStiffness());
+  CHECK(policy->actuatorStiffness() == Approx(2.0 * zq).epsilon(1e-12));
+  for (double bad : {0.0, -1.0, std::nan(""), HUGE_VAL}) CHECK_THROWS_AS(policy->setCouplingStiffness(bad), Error);
 }
