@@ -48,6 +48,7 @@ void SimulatedTau::reset(const Vec6& q0) {
   history_head_ = 0;
   started_ = false;
   applied_.setZero();
+  applied_delay_ = 0;
   hand_attached_ = false;
   hand_force_.setZero();
   time_ = 0.0;
@@ -111,6 +112,7 @@ Fault SimulatedTau::step(const Vec6& tau_command, const Vec3& external_force) no
   if (options_.max_delay_samples > 0)
     delay = std::uniform_int_distribution<std::size_t>(0, static_cast<std::size_t>(options_.max_delay_samples))(rng_);
   applied_ = command_history_[(history_head_ + command_history_.size() - delay) % command_history_.size()];
+  applied_delay_ = static_cast<int>(delay);
   clampSymmetric(applied_, model_.effortLimits());  // motor saturation
 
   if (!linearized_ || (q_ - q_lin_).cwiseAbs().maxCoeff() > options_.relinearize_tolerance) {

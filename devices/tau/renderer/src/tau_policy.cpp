@@ -44,17 +44,27 @@ std::string TauPolicy::name() const {
 }
 
 std::unique_ptr<LqrWallRenderer> TauPolicy::makeWall(int delay) const {
-  LqrWallRenderer::Options wall_options;
-  wall_options.keep_direction = true;
-  const LqrWallDesign design = designLqrWall(*model_, model_->homePose(), {}, observerNoiseForDelay(delay), delay);
-  return std::make_unique<LqrWallRenderer>(*model_, design.gains, wall_options);
+  CommandDelayDesign delay_model;
+  delay_model.samples = delay;
+  delay_model.random = design_.random_delay && delay > 0;
+  delay_model.rate_weight = delay_model.random ? design_.delay_rate_weight : 0.0;
+  const ObserverNoise noise = design_.custom_observer_noise ? design_.observer_noise : observerNoiseForDelay(delay);
+  const LqrWallDesign design = designLqrWall(*model_, model_->homePose(), design_.weights, noise, delay_model);
+  return std::make_unique<LqrWallRenderer>(*model_, design.gains, design_.renderer);
+}
+
+void TauPolicy::setWallDesign(const WallDesign& design) {
+  design_ = design;
+  design_changed_ = true;
 }
 
 void TauPolicy::reset(int command_delay) {
-  if (command_delay != wall_delay_) {
+  if (command_delay != wall_delay_ || design_changed_) {
     lqr_ = makeWall(command_delay);
     wall_delay_ = command_delay;
+    design_changed_ = false;
   }
+  applied_age_ = -1;
   lqr_->reset();
   for (Vec6& sent : sent_) sent.setZero();
   data_->pose = model_->homePose();  // forward kinematics' first guess
@@ -64,15 +74,20 @@ void TauPolicy::reset(int command_delay) {
 }
 
 void TauPolicy::sense(const SensedJoints& reading, SensedState& state) noexcept {
-  q_ = Eigen::Map<const Vec6>(reading.positions);
-  sense_fault_ = model_->forward(q_, *data_);  // the wall and the scene work from the encoders
-  if (sense_fault_ != Fault::kNone) return;    // the last assembled state stays
+  const Eigen::Map<const Vec6> q(reading.positions);
+  // The encoders' counts repeat while the tool is held or slow: their pose is the one solved.
+  if (reading.first || sense_fault_ != Fault::kNone || q != q_) {
+    q_ = q;
+    sense_fault_ = model_->forward(q_, *data_);  // the wall and the scene work from the encoders
+    if (sense_fault_ == Fault::kNone) rotation_ = PoseRotation(data_->pose).R;
+  }
+  if (sense_fault_ != Fault::kNone) return;  // the last assembled state stays
   // Rates through the Jacobian. The angular rates are pose-angle rates; within the TAU's +-10 deg
   // they are the angular velocity to within 2 %.
   const Vec6& pose = data_->pose;
   const Vec6 rates = data_->J * Eigen::Map<const Vec6>(reading.rates);
   state.position = pose.head<3>() - centre_;
-  state.rotation = PoseRotation(pose).R;
+  state.rotation = rotation_;
   state.linear_velocity = rates.head<3>();
   state.angular_velocity = rates.tail<3>();
   state.joints = q_;
@@ -89,6 +104,10 @@ void TauPolicy::readingLost() noexcept {
   for (Vec6& sent : sent_) sent.setZero();  // the device is held at zero meanwhile
   lqr_engaged_ = false;
   classifier_.holdLost();
+}
+
+void TauPolicy::commandApplied(int periods_ago) noexcept {
+  applied_age_ = periods_ago >= 0 && periods_ago <= kMaxCommandDelay ? periods_ago : -1;
 }
 
 void TauPolicy::endSession() noexcept {
@@ -153,7 +172,13 @@ Fault TauPolicy::render(const SceneInput& input, double* efforts) noexcept {
     }
     const SurfaceContact& surface = classifier_.surface();
     // sense() solved the forward kinematics of q_ (sense_fault_ is kNone): the wall reuses them.
-    const WallCommand& wall = lqr_->tick(q_, surface, *data_, &sent_[wall_delay_]);
+    // Under a random delay nothing but the board's report says which command acted: without one,
+    // the wall's observer takes the delay model's expectation (nullptr).
+    const Vec6* applied = applied_age_ >= 0                 ? &sent_[applied_age_]
+                          : lqr_->regulator().gains().random_command_delay ? nullptr
+                                                                            : &sent_[wall_delay_];
+    applied_age_ = -1;
+    const WallCommand& wall = lqr_->tick(q_, surface, *data_, applied);
     fault = wall.fault;
     tau_ = wall.torque;
     classifier_.wallTicked(wall);
@@ -180,7 +205,7 @@ Fault TauPolicy::render(const SceneInput& input, double* efforts) noexcept {
     classifier_.holdLost();
     if (fault == Fault::kNone) fault = Fault::kNonFiniteResult;
   }
-  for (int i = wall_delay_; i > 0; --i) sent_[i] = sent_[i - 1];
+  for (int i = kMaxCommandDelay; i > 0; --i) sent_[i] = sent_[i - 1];
   sent_[0] = tau_;
   Eigen::Map<Vec6> out(efforts);
   out = tau_;

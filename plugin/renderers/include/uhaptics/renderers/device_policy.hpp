@@ -104,6 +104,10 @@ class DevicePolicy {
   virtual void readingLost() noexcept {}
   /// The session ended (the last command was zero).
   virtual void endSession() noexcept {}
+  /// Servo tick, before render(): the board named the command it applied over the period the last
+  /// reading ends (its STATE's last_command_sequence): periods_ago render() calls before the newest
+  /// (0: the last render()'s efforts). Ignored by policies whose design assumes a fixed delay.
+  virtual void commandApplied(int periods_ago) noexcept { (void)periods_ago; }
 
   /// The scene's device-frame force in the model's task frame (where a simulated user pushes the
   /// model's plant); unchanged by default.

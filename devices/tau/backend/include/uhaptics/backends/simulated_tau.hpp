@@ -78,6 +78,9 @@ class SimulatedTau {
   /// Hand force on the tool, averaged over the last period (what the user feels as a load).
   const Vec3& handForce() const noexcept { return hand_force_; }
   const Vec6& appliedTorque() const noexcept { return applied_; }
+  /// Which command the last step() applied: how many step() calls before that step's own command it
+  /// came (0..max_delay_samples), as a board names the command it applied by its sequence number.
+  int appliedDelay() const noexcept { return applied_delay_; }
   /// The force [N] the applied torques exert at the tool in statics beyond holding up the mechanism's
   /// own weight: the translational part of w in J^T w = tau_applied - g(q), at the last step's
   /// configuration. What a user holding the tool still feels (the referee's applied force).
@@ -94,6 +97,7 @@ class SimulatedTau {
   SimulatedTauOptions options_;
   TauData data_;
   Vec6 q_ = Vec6::Zero(), qd_ = Vec6::Zero(), reading_ = Vec6::Zero(), applied_ = Vec6::Zero();
+  int applied_delay_ = 0;
   std::vector<Vec6> command_history_;  // ring buffer of the last max_delay + 1 commands
   std::size_t history_head_ = 0;
   bool started_ = false;  // a command has been applied since reset()

@@ -45,6 +45,7 @@
 #include "uhaptics/renderers/lqr_joint_regulator.hpp"
 #include "uhaptics/renderers/lqr_wall_renderer.hpp"
 #include "uhaptics/renderers/tau_contact_classifier.hpp"
+#include "uhaptics/renderers/tau_wall_design.hpp"
 
 namespace uhaptics {
 
@@ -61,6 +62,26 @@ class TauPolicy final : public DevicePolicy {
     WallMode wall_mode = WallMode::kAuto;
   };
 
+  /// How the LQR wall is designed and run (designLqrWall, LqrWallRenderer::Options); the defaults
+  /// are what every application gets.
+  struct WallDesign {
+    LqrWallWeights weights;
+    bool custom_observer_noise = false;  // false: observerNoiseForDelay(the delay reset() is given)
+    ObserverNoise observer_noise;
+    // true: the board applies the command of d ~ U{0..D} periods ago, d drawn each period, D the
+    // delay reset() is given (paper 001's CoS-D), and names it (commandApplied); designed by the
+    // generalized Riccati equation with this input-rate weight [(N m)^-2].
+    bool random_delay = false;
+    double delay_rate_weight = 0.0;
+    LqrWallRenderer::Options renderer = applicationWall();
+    /// Keeps the wall's command along its normal when it saturates: a user slides the tool freely.
+    static LqrWallRenderer::Options applicationWall() {
+      LqrWallRenderer::Options o;
+      o.keep_direction = true;
+      return o;
+    }
+  };
+
   /// Throws uhaptics::Error when the LQR wall's design fails or a figure cannot be declared.
   TauPolicy(TauModel model, const Options& options, FigureRecorder& figures);
 
@@ -72,6 +93,9 @@ class TauPolicy final : public DevicePolicy {
   Fault render(const SceneInput& input, double* efforts) noexcept override;
   void readingLost() noexcept override;
   void endSession() noexcept override;
+  /// The board's STATE names the command it applied (last_command_sequence): the wall's observer is
+  /// told that command's torque for the next render() instead of the one reset()'s delay implies.
+  void commandApplied(int periods_ago) noexcept override;
   Vec3 modelToDevicePoint(const Vec3& point) const noexcept override { return point - centre_; }
 
   const TauModel& model() const noexcept { return *model_; }
@@ -94,6 +118,9 @@ class TauPolicy final : public DevicePolicy {
   /// force. Non-finite input: inactive. clearContactSurface() hands back to the force-read surface.
   void setContactSurface(bool active, const Vec3& point, const Vec3& normal) noexcept;
   void clearContactSurface() noexcept;
+  /// Set-up: the wall's design from the next reset() on (a research protocol's; throws like reset()
+  /// there).
+  void setWallDesign(const WallDesign& design);
 
  private:
   /// The LQR wall designed at home for a command delay of delay periods (set-up: allocates, throws).
@@ -111,11 +138,15 @@ class TauPolicy final : public DevicePolicy {
   int fig_engagements_, fig_releases_, fig_held_ticks_, fig_entry_depth_, fig_max_penetration_,
       fig_saturated_ticks_, fig_spring_ticks_, fig_soft_contacts_, fig_soft_stiffness_, fig_overloads_;
   Vec6 tau_ = Vec6::Zero();
+  WallDesign design_;
+  bool design_changed_ = false;  // setWallDesign() since lqr_ was made
   int wall_delay_ = 0;  // the command delay [periods] lqr_ is designed for
   // The torques commanded in the last periods, newest first: the wall's observer is told the one
-  // acting on the plant when the reading was taken (sent_[wall_delay_]).
+  // acting on the plant when the reading was taken (sent_[wall_delay_], or the one the board named).
   std::array<Vec6, kMaxCommandDelay + 1> sent_;
+  int applied_age_ = -1;  // commandApplied() for the next render(); -1: not reported
   Vec6 q_ = Vec6::Zero();   // the latest joint reading
+  Mat3 rotation_ = Mat3::Identity();  // the handle's orientation at data_->pose
   Fault sense_fault_ = Fault::kNone;  // forward kinematics of the latest reading
   bool explicit_surface_ = false;     // setContactSurface() in force
   SurfaceContact explicit_;           // its surface, model frame
