@@ -2,7 +2,9 @@
 // (release without attraction, sliding without sticking).
 #include <catch2/catch.hpp>
 
+#include "device_servo_renderers.hpp"
 #include "renderer_fixtures.hpp"
+#include "uhaptics/backends/board_catalog.hpp"
 #include "uhaptics/core/limits.hpp"
 #include "uhaptics/experiments/tau_study.hpp"
 #include "uhaptics/renderers/lqr_wall_renderer.hpp"
@@ -10,6 +12,32 @@
 
 using namespace uhaptics;
 using namespace uhaptics::study;
+
+namespace {
+// The TAU as the product runs it: the devices' policy factory on the shipped parameter file.
+const TauProduct& tauProduct() {
+  static const DeviceDefinition& tau = *findDeviceByPaper("001");
+  static const TauProduct product{[] { return makeDevicePolicy(tau, test::paramsDir()); },
+                                  boardSpec(tau, test::paramsDir())};
+  return product;
+}
+// Paper 001's controller with the default weights, undelayed.
+StudyDevice& undelayedDevice() {
+  static StudyDevice device(tauProduct(), studyWallDesign({}, StudyParameters{}.contact_band), 0);
+  return device;
+}
+// The random-delay design of the CoS-D runs: d ~ U{0..3}, input-rate weight 200, the study's observer.
+StudyDevice& randomDelayDevice() {
+  static StudyDevice device(tauProduct(), [] {
+    TauPolicy::WallDesign design = studyWallDesign({}, StudyParameters{}.contact_band);
+    design.random_delay = true;
+    design.delay_rate_weight = 200.0;
+    design.custom_observer_noise = true;
+    return design;
+  }(), 3);
+  return device;
+}
+}  // namespace
 
 TEST_CASE("Study, reduced grid: LQR penetration < 1 mm and K_zs an order above the spring wall") {
   // Scenario 1 (the 15 N step, the hard case for the torques) at the four corners of the wall,
@@ -30,9 +58,9 @@ TEST_CASE("Study, reduced grid: LQR penetration < 1 mm and K_zs an order above t
     spec.y = k.y;
     spec.seed = 11;
     spec.scenario = k.scenario;
-    const RunMetrics lqr = simulateRun(test::tauModel(), test::tauHomeGains(), spec);
+    const RunMetrics lqr = simulateRun(test::tauModel(), undelayedDevice(), spec);
     spec.controller = Controller::kSpring;
-    const RunMetrics spring = simulateRun(test::tauModel(), test::tauHomeGains(), spec);
+    const RunMetrics spring = simulateRun(test::tauModel(), undelayedDevice(), spec);
     INFO("x " << k.x << " y " << k.y << " scenario " << static_cast<int>(k.scenario));
     CHECK(lqr.fault == Fault::kNone);
     // The baseline renders only the normal spring; its free directions stay in the workspace
@@ -53,12 +81,13 @@ TEST_CASE("Study runs are exactly repeatable for a seed") {
   RunSpec spec;
   spec.seed = 99;
   spec.max_delay_samples = 3;
-  const RunMetrics a = simulateRun(test::tauModel(), test::tauHomeGains(), spec);
-  const RunMetrics b = simulateRun(test::tauModel(), test::tauHomeGains(), spec);
+  const RunMetrics a = simulateRun(test::tauModel(), randomDelayDevice(), spec);
+  const RunMetrics b = simulateRun(test::tauModel(), randomDelayDevice(), spec);
   CHECK(a.d_z1 == b.d_z1);
   CHECK(a.k_zs == b.k_zs);
+  CHECK(a.referee.generated_energy_mJ == b.referee.generated_energy_mJ);
   spec.seed = 100;
-  CHECK(simulateRun(test::tauModel(), test::tauHomeGains(), spec).force_level != a.force_level);
+  CHECK(simulateRun(test::tauModel(), randomDelayDevice(), spec).force_level != a.force_level);
 }
 
 namespace {
@@ -160,14 +189,14 @@ TEST_CASE("Random 0-3 sample command delay: the random-delay design holds the wa
       spec.y = sc == Scenario::kStepForce ? -c : 0.0;
       spec.seed = seed;
       spec.max_delay_samples = 3;
-      const RunMetrics aware = simulateRun(test::tauModel(), delay_gains, spec);
+      const RunMetrics aware = simulateRun(test::tauModel(), randomDelayDevice(), spec);
       faults_delay_aware += aware.fault != Fault::kNone;
       pen = std::max(pen, aware.max_penetration);
-      faults_undelayed += simulateRun(test::tauModel(), test::tauHomeGains(), spec).fault != Fault::kNone;
+      faults_undelayed += simulateRun(test::tauModel(), undelayedDevice(), spec).fault != Fault::kNone;
       // The same run with the observer guessing the applied torque (the mean of the commands it
-      // may have been) instead of being told it by the device.
-      spec.applied_torque_known = false;
-      const RunMetrics guessed = simulateRun(test::tauModel(), delay_gains, spec);
+      // may have been) instead of being told by the board which command acted.
+      spec.applied_command_reported = false;
+      const RunMetrics guessed = simulateRun(test::tauModel(), randomDelayDevice(), spec);
       steady_told += aware.d_zs;
       steady_guessed += guessed.fault != Fault::kNone ? 1.0 : guessed.d_zs;
     }

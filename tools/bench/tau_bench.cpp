@@ -2,6 +2,8 @@
 // wall tick, one simulated servo period, and the study's throughput (simulated s per wall s).
 #include <benchmark/benchmark.h>
 
+#include "device_servo_renderers.hpp"
+#include "uhaptics/backends/board_catalog.hpp"
 #include "uhaptics/backends/simulated_tau.hpp"
 #include "uhaptics/experiments/tau_study.hpp"
 #include "uhaptics/renderers/lqr_wall_renderer.hpp"
@@ -98,7 +100,11 @@ static void BM_TauStudyRun(benchmark::State& state) {
   study::RunSpec spec;
   spec.controller = state.range(0) ? study::Controller::kLqr : study::Controller::kSpring;
   if (state.range(1) == 0) spec.relinearize_tolerance = 0.0;
-  for (auto _ : state) benchmark::DoNotOptimize(study::simulateRun(tauModel(), tauGains(), spec).k_zs);
+  const DeviceDefinition& tau = *findDeviceByPaper("001");
+  const study::TauProduct product{[&tau] { return makeDevicePolicy(tau, UHAPTICS_PARAMS_DIR); },
+                                  boardSpec(tau, UHAPTICS_PARAMS_DIR)};
+  study::StudyDevice device(product, study::studyWallDesign({}, study::StudyParameters{}.contact_band), 0);
+  for (auto _ : state) benchmark::DoNotOptimize(study::simulateRun(tauModel(), device, spec).k_zs);
   state.counters["sim_s_per_s"] = benchmark::Counter(3.0 * static_cast<double>(state.iterations()), benchmark::Counter::kIsRate);
 }
 BENCHMARK(BM_TauStudyRun)->ArgsProduct({{1, 0}, {1, 0}})->ArgNames({"lqr", "held"})->Unit(benchmark::kMillisecond);

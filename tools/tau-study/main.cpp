@@ -11,6 +11,8 @@
 #include <string>
 #include <vector>
 
+#include "device_servo_renderers.hpp"  // the devices' policy factory (tools/servo)
+#include "uhaptics/backends/board_catalog.hpp"
 #include "uhaptics/backends/params_location.hpp"
 #include "uhaptics/experiments/parallel.hpp"
 #include "uhaptics/experiments/reproduction.hpp"
@@ -73,8 +75,8 @@ int main(int argc, char** argv) {
                  "random-delay design only: weight on (u_k - u_{k-1})^2 per joint, (N m)^-2", 0.0, kMaxWeight);
   bool applied_unknown = false;
   app.add_flag("--applied-unknown", applied_unknown,
-               "the observer infers the torque the device applied from the delay model instead of the device's "
-               "report (the protocol's STATE frame echoes the sequence of the command applied)");
+               "the wall's observer takes the delay model's expected torque instead of the command the board names "
+               "as applied (the protocol's STATE frame: last_command_sequence)");
   std::vector<double> delay_observer;
   cli.numbers("--delay-observer", delay_observer, 4,
               "observer noise of the delay variants: velocity, disturbance, position process noise, encoder std "
@@ -126,7 +128,6 @@ int main(int argc, char** argv) {
     if (!delay_observer.empty())
       delay_noise = {delay_observer[0], delay_observer[1], delay_observer[2], delay_observer[3]};
     const LqrWallDesign delay_wall = designLqrWall(model, model.homePose(), delay_weights, delay_noise, delay_model);
-    const LqrWallGains& delay_gains = delay_wall.gains;
     if (delay_model.random)
       std::printf("random-delay design (d ~ U{0..%d}, rate weight %g): generalized Riccati %d steps, residual %.1e, "
                   "mean-square radius %.4f (state feedback)\n",
@@ -141,21 +142,42 @@ int main(int argc, char** argv) {
 
     const Requirements requirements = checkRequirements(model, gains);
 
+    // The study runs the product: the TAU's policy from the devices' factory, on its board's spec.
+    std::string params_dir = ".", params_file = params;
+    if (const auto slash = params.find_last_of('/'); slash != std::string::npos) {
+      params_dir = params.substr(0, slash);
+      params_file = params.substr(slash + 1);
+    }
+    const DeviceDefinition* registered = findDeviceByPaper("001");
+    if (registered == nullptr) throw Error("no registered device reproduces paper 001");
+    DeviceDefinition tau = *registered;
+    tau.params_file = params_file;
+    const TauProduct product{[&tau, &params_dir] { return makeDevicePolicy(tau, params_dir); }, boardSpec(tau, params_dir)};
+    StudyDesigns designs;
+    const double contact_band = StudyParameters{}.contact_band;
+    designs.undelayed = studyWallDesign(weights, contact_band);
+    designs.delayed = studyWallDesign(delay_weights, contact_band);
+    designs.delayed.custom_observer_noise = true;
+    designs.delayed.observer_noise = delay_noise;
+    designs.delayed.random_delay = delay_model.random;
+    designs.delayed.delay_rate_weight = delay_model.rate_weight;
+    if (delay_release >= 0.0) designs.delayed.renderer.release_distance = delay_release;
+    designs.delay_samples = delay_design;
+
     GridOptions grid_options;
     grid_options.grid = grid;
     grid_options.runs = runs;
     grid_options.threads = threads;
     grid_options.seed = seed;
     grid_options.quantize = !ideal_encoders;
-    grid_options.applied_torque_known = !applied_unknown;
-    grid_options.delay_release_distance = delay_release;
+    grid_options.applied_command_reported = !applied_unknown;
     grid_options.substeps = substeps;
     grid_options.relinearize_tolerance = relinearize;
     const std::size_t jobs = static_cast<std::size_t>(grid * grid) * static_cast<std::size_t>(runs);
     tools::Progress progress("tau-study", jobs);
     const auto t0 = std::chrono::steady_clock::now();
     const std::clock_t cpu0 = std::clock();  // process CPU time, all threads
-    const GridStudy study = runGrid(model, gains, delay_gains, grid_options, [&] { progress.advance(); });
+    const GridStudy study = runGrid(model, product, designs, grid_options, [&] { progress.advance(); });
     progress.finish();
     const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     const double cpu = static_cast<double>(std::clock() - cpu0) / CLOCKS_PER_SEC;
@@ -184,8 +206,10 @@ int main(int argc, char** argv) {
     std::printf("%zu query points x %d runs x %zu variants = %zu runs of 3 s; faults: %d\n", study.points.size(), runs,
                 kNumVariants, study.simulated_runs, study.faults);
     for (std::size_t v = 0; v < kNumVariants; ++v)
-      std::printf("  %-13s faults %3d / %zu, max penetration %.3f mm\n", variants[v].label, study.variant_faults[v], jobs,
-                  1e3 * study.max_penetration[v]);
+      std::printf("  %-13s faults %3d / %zu, max penetration %.3f mm; referee: max true penetration %.3f mm, most "
+                  "energy given to the user in a run %.1f mJ\n",
+                  variants[v].label, study.variant_faults[v], jobs, 1e3 * study.max_penetration[v],
+                  1e3 * study.referee_max_penetration[v], study.referee_max_energy[v]);
     std::printf("wall time %.2f s on %u threads: %.0f simulated seconds per second; CPU %.1f s (%.1f us per "
                 "simulated servo period)\n",
                 wall, threads ? threads : experiments::hardwareThreads(), simulated / wall, cpu,
@@ -195,7 +219,7 @@ int main(int argc, char** argv) {
     for (const Scenario sc : {Scenario::kStepForce, Scenario::kHand}) {
       tools::CsvWriter trace_csv(out + "/trace_s" + std::to_string(static_cast<int>(sc)) + ".csv",
                                  {"t", "lqr_z_mm", "spring_z_mm", "force_n"});
-      const CentreTraces traces = centreTraces(model, gains, sc, seed);
+      const CentreTraces traces = centreTraces(model, product, designs.undelayed, sc, seed);
       const std::vector<TraceSample>& a = traces.lqr;
       const std::vector<TraceSample>& b = traces.spring;
       for (std::size_t i = 0; i < std::min(a.size(), b.size()); ++i)

@@ -4,12 +4,12 @@
 #include <cmath>
 #include <cstdio>
 #include <limits>
+#include <memory>
+#include <mutex>
 #include <random>
 #include <utility>
 
 #include "uhaptics/experiments/parallel.hpp"
-#include "uhaptics/renderers/lqr_wall_renderer.hpp"
-#include "uhaptics/renderers/spring_wall_renderer.hpp"
 
 namespace uhaptics::study {
 
@@ -28,21 +28,52 @@ double handAcceleration(double t, double a_c) {
 
 }  // namespace
 
-RunMetrics simulateRun(const TauModel& model, const LqrWallGains& gains, const RunSpec& spec,
-                       const StudyParameters& params, std::vector<TraceSample>* trace) {
+TauPolicy::WallDesign studyWallDesign(const LqrWallWeights& weights, double contact_band) {
+  TauPolicy::WallDesign design;
+  design.weights = weights;
+  // Paper 001's controller: the whole pose held at the contact point, bilaterally.
+  design.renderer.follow_tangentially = false;
+  design.renderer.unilateral = false;
+  design.renderer.keep_direction = false;
+  // The wall's own 0.2 mm release is for interactive, unilateral use; the study holds while the
+  // environment reports the contact (a delayed loop bounces the tool above 0.2 mm after the step).
+  design.renderer.release_distance = contact_band;
+  return design;
+}
+
+namespace {
+TauPolicy& tauPolicy(DevicePolicy* policy) {
+  auto* tau = dynamic_cast<TauPolicy*>(policy);
+  if (tau == nullptr) throw Error("study: the device's policy factory did not make the TAU's policy");
+  return *tau;
+}
+}  // namespace
+
+StudyDevice::StudyDevice(const TauProduct& product, const TauPolicy::WallDesign& design, int command_delay)
+    : policy_(product.make_policy ? product.make_policy() : nullptr),
+      tau_(&tauPolicy(policy_.get())),
+      servo_(*policy_, product.spec),
+      command_delay_(command_delay) {
+  tau_->setWallDesign(design);
+  servo_.reset(command_delay_);  // designs the wall once, here
+}
+
+RunMetrics simulateRun(const TauModel& model, StudyDevice& device, const RunSpec& spec, const StudyParameters& params,
+                       std::vector<TraceSample>* trace) {
   std::mt19937_64 rng(spec.seed);
   RunMetrics m;
   m.force_level = std::uniform_real_distribution<double>(params.force_min, params.force_max)(rng);
   std::normal_distribution<double> noise(0.0, params.noise_sigma);
 
+  const bool lqr_wall = spec.controller == Controller::kLqr;
   SimulatedTauOptions so;
   so.max_delay_samples = spec.max_delay_samples;
   so.quantize = spec.quantize;
   so.substeps = spec.substeps;
   so.relinearize_tolerance = spec.relinearize_tolerance;
   so.seed = spec.seed ^ 0x9e3779b97f4a7c15ULL;
-  so.tool_damping = spec.controller == Controller::kSpring ? params.device_damping : 0.0;
-  so.tool_rotational_damping = spec.controller == Controller::kSpring ? params.device_rotational_damping : 0.0;
+  so.tool_damping = lqr_wall ? 0.0 : params.device_damping;
+  so.tool_rotational_damping = lqr_wall ? 0.0 : params.device_rotational_damping;
   SimulatedTau sim(model, so);
   Vec6 start_pose = model.homePose();
   start_pose(0) = spec.x;
@@ -52,19 +83,15 @@ RunMetrics simulateRun(const TauModel& model, const LqrWallGains& gains, const R
   if (model.inverse(start_pose, q0) != Fault::kNone) throw Error("study: query point outside the workspace");
   sim.reset(q0);
 
-  LqrWallRenderer::Options lqr_options;
-  // Paper 001's controller: the whole pose held at the contact point, bilaterally.
-  lqr_options.follow_tangentially = false;
-  lqr_options.unilateral = false;
-  // The renderer's own 0.2 mm release is for interactive, unilateral use; the study holds while the
-  // environment reports the contact (a delayed loop bounces the tool above 0.2 mm after the step).
-  lqr_options.release_distance = spec.lqr_release_distance >= 0.0 ? spec.lqr_release_distance : params.contact_band;
-  LqrWallRenderer lqr(model, gains, lqr_options);
-  SpringWallRenderer::Options spring_options;
-  spring_options.stiffness = params.spring_stiffness;
-  SpringWallRenderer spring(model, spring_options);
-  TauData device(model);  // the device adapter's own forward kinematics (CHAI3D getPosition())
-  device.pose = start_pose;
+  TauPolicy& policy = device.policy();
+  experiments::PolicyServo& servo = device.servo();
+  policy.setWallMode(lqr_wall ? TauPolicy::WallMode::kAuto : TauPolicy::WallMode::kSpring);
+  policy.clearContactSurface();
+  servo.reset(device.commandDelay());
+  // The scene: the wall z = 0 of the model frame, in the device frame the policy reports.
+  const Vec3 normal = Vec3::UnitZ();
+  const Vec3 wall_point = policy.modelToDevicePoint(Vec3::Zero());
+  Referee referee;
 
   const double T = model.servoPeriod();
   const int steps = static_cast<int>(std::lround(spec.duration / T));
@@ -75,42 +102,30 @@ RunMetrics simulateRun(const TauModel& model, const LqrWallGains& gains, const R
   const double noise_start = hand ? 2.0 : 1.0;
   double steady_sum = 0.0;
   int steady_n = 0;
-  SurfaceContact contact;
-  contact.normal = Vec3::UnitZ();
   // First impact: the largest penetration within the impact window after the disturbance starts
   // (scenario 1: 0.3 s, several times the baseline's first oscillation period; scenario 2: the
   // whole 1 s ramp of the hand force).
   const double impact_end = disturbance_start + (hand ? 1.0 : 0.3);
   Vec3 hand_p = start_pose.head<3>(), hand_v = Vec3::Zero();
-  Vec6 fk_q = Vec6::Zero();
-  Fault fk = Fault::kNone;
+  Vec6 efforts = Vec6::Zero();
   for (int k = 0; k < steps; ++k) {
     const double t = k * T;
-    // Environment: flat wall z = 0, contact reported within the band (proxy on the surface).
-    const Vec6& q_meas = sim.encoderReading();
-    // The quantized reading often repeats (a held tool); forward() from the previous solution would
-    // return the same pose and fault.
-    if (k == 0 || q_meas != fk_q) {
-      // Newton from the first-order prediction, as the renderers' own front end starts it.
-      if (k > 0 && fk == Fault::kNone) device.pose.noalias() += device.J * (q_meas - fk_q);
-      fk = model.forward(q_meas, device);
-      fk_q = q_meas;
+    // What the board senses: the encoders, and which command acted over the last period.
+    const int applied_age = spec.applied_command_reported && k > 0 ? sim.appliedDelay() : -1;
+    const SensedState& sensed = servo.sense(sim.encoderReading().data(), applied_age);
+    // The scene: a spring wall that reports its surface while the tool is within the contact band.
+    const double depth = (wall_point - sensed.position).dot(normal);
+    const Vec3 force = params.spring_stiffness * std::max(0.0, depth) * normal;
+    if (lqr_wall) {
+      const Vec3 surface_point(sensed.position.x(), sensed.position.y(), wall_point.z());
+      policy.setContactSurface(-depth <= params.contact_band, surface_point, normal);
     }
-    contact.active = fk == Fault::kNone && device.pose(2) <= params.contact_band;
-    contact.point = Vec3(device.pose(0), device.pose(1), 0.0);
-    const Vec6* applied = spec.applied_torque_known ? &sim.appliedTorque() : nullptr;
-    // The walls take the solved kinematics as they are (pose and Jacobian): one solve per period.
-    const bool lqr_wall = spec.controller == Controller::kLqr;
-    const WallCommand& cmd = fk != Fault::kNone ? (lqr_wall ? lqr.tick(q_meas, contact, nullptr, applied)
-                                                            : spring.tick(q_meas, contact, nullptr))
-                             : lqr_wall         ? lqr.tick(q_meas, contact, device, applied)
-                                                : spring.tick(q_meas, contact, device);
-    if (cmd.fault != Fault::kNone && m.fault == Fault::kNone) {
-      m.fault = cmd.fault;
+    const Fault rendered = servo.render(force, efforts.data());
+    if (rendered != Fault::kNone && m.fault == Fault::kNone) {
+      m.fault = rendered;
       m.fault_time = t;
     }
-    m.max_torque = std::max(m.max_torque, cmd.torque.cwiseAbs().maxCoeff());
-    m.saturated_ticks += cmd.saturated ? 1 : 0;
+    m.max_torque = std::max(m.max_torque, efforts.cwiseAbs().maxCoeff());
 
     const double noise_now = t >= noise_start ? noise(rng) : 0.0;
     Vec3 external = Vec3::Zero();
@@ -123,13 +138,26 @@ RunMetrics simulateRun(const TauModel& model, const LqrWallGains& gains, const R
     } else if (t >= disturbance_start) {
       external.z() = -(m.force_level + noise_now);
     }
-    const Fault sf = sim.step(cmd.torque, external);
+    const Fault sf = sim.step(efforts, external);
     if (sf != Fault::kNone) {
       m.fault = sf;
       m.fault_time = t;
       m.fault_in_plant = true;
       break;
     }
+    // The truth, for the metrics and the referee only.
+    RefereeSample sample;
+    sample.dt = T;
+    sample.truth.position = sim.pose().head<3>();
+    sample.truth.velocity = sim.toolVelocity();
+    sample.truth.user_force = (hand ? sim.handForce() : Vec3::Zero()) + external;
+    sample.truth.applied_force = sim.toolForce();
+    sample.truth.saturated =
+        (sim.appliedTorque().cwiseAbs().array() >= (1.0 - 1e-9) * model.effortLimits().array()).any();
+    sample.asked_force = policy.deviceToModelForce(force);
+    referee.observe(sample);
+    m.saturated_ticks += sample.truth.saturated ? 1 : 0;
+
     const double push = hand ? -sim.handForce().z() + noise_now : -external.z();
     const double tn = t + T;
     const double pen = std::max(0.0, -sim.pose()(2));
@@ -143,8 +171,10 @@ RunMetrics simulateRun(const TauModel& model, const LqrWallGains& gains, const R
       steady_sum += pen;
       ++steady_n;
     }
-    if (trace) trace->push_back({tn, sim.pose()(2), push, cmd.torque(5), cmd.in_contact ? 1 : 0});
+    if (trace) trace->push_back({tn, sim.pose()(2), push, efforts(5), policy.lqrEngaged() ? 1 : 0});
   }
+  policy.clearContactSurface();
+  m.referee = referee.report();
   m.k_z1 = m.k_z1 / std::max(m.d_z1, params.min_penetration);
   m.d_zs = steady_n > 0 ? steady_sum / steady_n : 0.0;
   m.k_zs = m.force_level / std::max(m.d_zs, params.min_penetration);
@@ -267,7 +297,52 @@ Statistics statistics(const std::vector<double>& v) {
   return s;
 }
 
-GridStudy runGrid(const TauModel& model, const LqrWallGains& gains, const LqrWallGains& delay_gains,
+namespace {
+// One worker's devices: the undelayed variants' and the delay variants'.
+struct WorkerDevices {
+  StudyDevice undelayed, delayed;
+  WorkerDevices(const TauProduct& product, const StudyDesigns& designs)
+      : undelayed(product, designs.undelayed, 0), delayed(product, designs.delayed, designs.delay_samples) {}
+};
+
+// Devices handed to the jobs, each used by one job at a time: a policy is single-threaded, and
+// designing its walls once per worker instead of once per run keeps the study's time in the runs.
+class DevicePool {
+ public:
+  DevicePool(const TauProduct& product, const StudyDesigns& designs) : product_(product), designs_(designs) {}
+  std::unique_ptr<WorkerDevices> take() {
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      if (!free_.empty()) {
+        std::unique_ptr<WorkerDevices> devices = std::move(free_.back());
+        free_.pop_back();
+        return devices;
+      }
+    }
+    return std::make_unique<WorkerDevices>(product_, designs_);
+  }
+  void give(std::unique_ptr<WorkerDevices> devices) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    free_.push_back(std::move(devices));
+  }
+
+ private:
+  const TauProduct& product_;
+  const StudyDesigns& designs_;
+  std::mutex mutex_;
+  std::vector<std::unique_ptr<WorkerDevices>> free_;
+};
+
+// The q-quantile of values (nearest rank); infinite values sort last.
+double quantile(std::vector<double> values, double q) {
+  if (values.empty()) return 0.0;
+  std::sort(values.begin(), values.end());
+  const auto rank = static_cast<std::size_t>(std::ceil(q * static_cast<double>(values.size())));
+  return values[std::min(values.size() - 1, rank > 0 ? rank - 1 : 0)];
+}
+}  // namespace
+
+GridStudy runGrid(const TauModel& model, const TauProduct& product, const StudyDesigns& designs,
                   const GridOptions& options, const std::function<void()>& job_done) {
   const auto& variants = studyVariants();
   const int grid = options.grid, runs = options.runs;
@@ -277,7 +352,9 @@ GridStudy runGrid(const TauModel& model, const LqrWallGains& gains, const LqrWal
   const std::size_t points = static_cast<std::size_t>(grid * grid);
   const std::size_t jobs = points * static_cast<std::size_t>(runs);
   std::vector<RunMetrics> results(jobs * kNumVariants);
+  DevicePool pool(product, designs);
   experiments::parallelFor(jobs, options.threads, [&](std::size_t job) {
+    std::unique_ptr<WorkerDevices> devices = pool.take();
     const std::size_t point = job / static_cast<std::size_t>(runs);
     RunSpec spec;
     spec.x = coordinate(point % grid);
@@ -288,12 +365,13 @@ GridStudy runGrid(const TauModel& model, const LqrWallGains& gains, const LqrWal
       spec.scenario = variants[v].scenario;
       spec.max_delay_samples = variants[v].delay;
       spec.quantize = options.quantize;
-      spec.lqr_release_distance = variants[v].delay > 0 ? options.delay_release_distance : -1.0;
-      spec.applied_torque_known = options.applied_torque_known;
+      spec.applied_command_reported = options.applied_command_reported;
       spec.substeps = options.substeps;
       spec.relinearize_tolerance = options.relinearize_tolerance;
-      results[job * kNumVariants + v] = simulateRun(model, variants[v].delay > 0 ? delay_gains : gains, spec);
+      StudyDevice& device = variants[v].delay > 0 ? devices->delayed : devices->undelayed;
+      results[job * kNumVariants + v] = simulateRun(model, device, spec);
     }
+    pool.give(std::move(devices));
     if (job_done) job_done();
   });
 
@@ -303,6 +381,7 @@ GridStudy runGrid(const TauModel& model, const LqrWallGains& gains, const LqrWal
   study.simulated_runs = results.size();
   study.lowest_k_z1.fill(std::numeric_limits<double>::infinity());
   study.lowest_k_zs.fill(std::numeric_limits<double>::infinity());
+  std::vector<double> delay_depths;
   for (std::size_t p = 0; p < points; ++p) {
     GridPoint& point = study.points.emplace_back();
     point.x = coordinate(p % grid);
@@ -311,12 +390,17 @@ GridStudy runGrid(const TauModel& model, const LqrWallGains& gains, const LqrWal
       std::vector<double> dz1, kz1, dzs, kzs, pen;
       for (int r = 0; r < runs; ++r) {
         const RunMetrics& m = results[(p * runs + r) * kNumVariants + v];
-        study.faults += m.fault != Fault::kNone;
-        study.variant_faults[v] += m.fault != Fault::kNone;
+        const bool lost = m.fault != Fault::kNone;
+        study.faults += lost;
+        study.variant_faults[v] += lost;
         if (variants[v].delay > 0) {
           ++study.delay_runs;
-          study.delay_runs_over_1mm += m.max_penetration > 1e-3 || m.fault != Fault::kNone;
+          study.delay_runs_over_1mm += m.max_penetration > 1e-3 || lost;
+          delay_depths.push_back(lost ? std::numeric_limits<double>::infinity() : m.max_penetration);
         }
+        study.referee_max_penetration[v] =
+            std::max(study.referee_max_penetration[v], 1e-3 * m.referee.max_true_penetration_mm);
+        study.referee_max_energy[v] = std::max(study.referee_max_energy[v], m.referee.generated_energy_mJ);
         dz1.push_back(m.d_z1);
         kz1.push_back(m.k_z1);
         dzs.push_back(m.d_zs);
@@ -332,19 +416,21 @@ GridStudy runGrid(const TauModel& model, const LqrWallGains& gains, const LqrWal
       study.max_penetration[v] = std::max(study.max_penetration[v], s.penetration.max);
     }
   }
+  study.delay_max_of_90_quantile = quantile(delay_depths, 1.0 - 1.0 / 91.0);
   return study;
 }
 
-CentreTraces centreTraces(const TauModel& model, const LqrWallGains& gains, Scenario scenario,
-                          std::uint64_t base_seed) {
+CentreTraces centreTraces(const TauModel& model, const TauProduct& product, const TauPolicy::WallDesign& design,
+                          Scenario scenario, std::uint64_t base_seed) {
   CentreTraces traces;
+  StudyDevice device(product, design, 0);
   RunSpec spec;
   spec.scenario = scenario;
   spec.seed = runSeed(base_seed, 0);
   spec.controller = Controller::kLqr;
-  simulateRun(model, gains, spec, {}, &traces.lqr);
+  simulateRun(model, device, spec, {}, &traces.lqr);
   spec.controller = Controller::kSpring;
-  simulateRun(model, gains, spec, {}, &traces.spring);
+  simulateRun(model, device, spec, {}, &traces.spring);
   return traces;
 }
 
@@ -372,9 +458,20 @@ experiments::ReproductionTable reproductionTable(const TauModel& model, const Lq
              Accepted::within(6202.1, 0.15 * 6202.1)});
   const double lqr_pen = std::max(study.max_penetration[0], study.max_penetration[2]);
   table.addBound("001", "max penetration, LQR", 1e3 * lqr_pen, "< 1 mm", Accepted::below(1.0), "mm");
-  const double delay_pen = std::max(study.max_penetration[4], study.max_penetration[5]);
-  table.addBound("001", "max penetration, LQR, delay 0-3", 1e3 * delay_pen, "< 1.1 mm (paper CoS-D)",
-                 Accepted::below(1.1), "mm");
+  // The same claim judged by the referee from the plant's truth (depth from the entry point it reads off
+  // the scene's force, whichever renderer held the tool), with the spring baseline beside it.
+  const double referee_lqr = 1e3 * std::max(study.referee_max_penetration[0], study.referee_max_penetration[2]);
+  const double referee_spring = 1e3 * std::max(study.referee_max_penetration[1], study.referee_max_penetration[3]);
+  char referee_criterion[80];
+  std::snprintf(referee_criterion, sizeof referee_criterion, "< 1 mm and <= half the spring's (%.3g mm)",
+                referee_spring);
+  table.addBound("001", "referee: max true penetration, LQR vs spring", referee_lqr, referee_criterion,
+                 Accepted::below(std::min(1.0, 0.5 * referee_spring)), "mm");
+  // Paper 001's CoS-D: the deepest of 90 runs below 1.1 mm. Over our many more runs the maximum is a
+  // rarer event than the paper measured; its like is the quantile the deepest of 90 runs falls at.
+  table.addBound("001", "penetration, LQR, delay 0-3, quantile 1-1/91 (deepest of 90 runs)",
+                 1e3 * study.delay_max_of_90_quantile, "< 1.1 mm (paper CoS-D: max of 90 runs)", Accepted::below(1.1),
+                 "mm");
   // Paper 001's CoS-D: 3 of its 90 runs (scenario 1) above 1 mm.
   const double delay_over_share =
       100.0 * static_cast<double>(study.delay_runs_over_1mm) / static_cast<double>(study.delay_runs);

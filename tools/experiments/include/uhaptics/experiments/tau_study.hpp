@@ -5,15 +5,29 @@
 // checks (step reference, force step); the study over a grid of query points; and paper 001's
 // published numbers with the checks against them (reproductionTable). uhaptics-tau-study runs it and
 // writes the files, the tau tests check it.
+//
+// Both controllers are the product's: the TAU's DevicePolicy (a TauPolicy) from the device's factory,
+// run by PolicyServo on what the board senses (encoder counts, the shared rate estimator, the command
+// delay the policy is reset with, the command the board names as applied). The scene is a 6000 N/m
+// spring wall that states its surface while the tool is within the contact band: the LQR controller
+// is the policy holding that surface (TauPolicy::setContactSurface), the spring baseline is the
+// policy in wall mode kSpring rendering the scene's force. The simulator's truth (pose, user force,
+// applied force) feeds only the metrics and the referee.
 #include <array>
 #include <cstddef>
 #include <cstdint>
 #include <functional>
 #include <vector>
 
+#include <memory>
+
+#include "uhaptics/backends/device_definition.hpp"
+#include "uhaptics/backends/referee.hpp"
 #include "uhaptics/backends/simulated_tau.hpp"
+#include "uhaptics/experiments/policy_servo.hpp"
 #include "uhaptics/experiments/reproduction.hpp"
 #include "uhaptics/renderers/lqr_joint_regulator.hpp"
+#include "uhaptics/renderers/tau_policy.hpp"
 #include "uhaptics/renderers/tau_wall_design.hpp"
 
 namespace uhaptics::study {
@@ -30,12 +44,9 @@ struct RunSpec {
   int max_delay_samples = 0;    // 0..3 in the paper's delay variant
   bool quantize = true;         // 4096-count encoders (false: ideal joint sensors)
   double duration = 3.0;        // s
-  // The device reports the torque it applied over the last period (our protocol's STATE frame echoes
-  // the sequence of the command applied), so the observer need not guess it under a random delay.
-  bool applied_torque_known = true;
-  // LQR release height above the wall (m); < 0: the contact band, i.e. paper 001's controller holds
-  // the pose for as long as the environment reports the contact.
-  double lqr_release_distance = -1.0;
+  // The board names the command it applied over the last period (the protocol's STATE frame:
+  // last_command_sequence), so the wall's observer need not guess it under a random delay.
+  bool applied_command_reported = true;
   int substeps = 0;  // plant integration substeps per servo period; 0: the model's (tau.json)
   // SimulatedTauOptions::relinearize_tolerance (rad). 1e-3, two thirds of an encoder count: the
   // spring rows move by up to 0.8 %, as much as the 10-substep integration's own error, the LQR
@@ -69,6 +80,33 @@ struct RunMetrics {
   Fault fault = Fault::kNone;
   double fault_time = -1.0;      // s, when the first fault happened
   bool fault_in_plant = false;   // the simulated device (not the renderer) failed
+  RefereeReport referee;         // the run judged from the plant's truth (referee.hpp)
+};
+
+/// The TAU as the product runs it (its factory makes a TauPolicy).
+using TauProduct = experiments::DeviceProduct;
+
+/// The LQR wall as paper 001's study runs it: the whole pose held at the contact point, bilaterally,
+/// for as long as the environment reports the contact (release at the contact band), per-joint
+/// saturation; designed with weights (and observer noise, where given) for the command delay the
+/// policy is reset with.
+TauPolicy::WallDesign studyWallDesign(const LqrWallWeights& weights, double contact_band);
+
+/// One worker's device: the factory's policy with the study's wall design, reset for command_delay
+/// periods before each run, and its servo runner. Throws Error when the factory's policy is not the
+/// TAU's or the design fails.
+class StudyDevice {
+ public:
+  StudyDevice(const TauProduct& product, const TauPolicy::WallDesign& design, int command_delay);
+  TauPolicy& policy() noexcept { return *tau_; }
+  experiments::PolicyServo& servo() noexcept { return servo_; }
+  int commandDelay() const noexcept { return command_delay_; }
+
+ private:
+  std::unique_ptr<DevicePolicy> policy_;
+  TauPolicy* tau_;
+  experiments::PolicyServo servo_;
+  int command_delay_;
 };
 
 struct TraceSample {
@@ -76,8 +114,10 @@ struct TraceSample {
   int contact;
 };
 
-/// One 3 s run. `trace` (optional) receives one sample per servo period.
-RunMetrics simulateRun(const TauModel& model, const LqrWallGains& gains, const RunSpec& spec,
+/// One 3 s run of device on the simulated plant of model (its delay: spec.max_delay_samples; the
+/// device's command delay is what its policy was designed for). `trace` (optional) receives one
+/// sample per servo period.
+RunMetrics simulateRun(const TauModel& model, StudyDevice& device, const RunSpec& spec,
                        const StudyParameters& params = {}, std::vector<TraceSample>* trace = nullptr);
 
 struct StepResponse {
@@ -132,9 +172,8 @@ struct GridOptions {
   int runs = 4;       // Monte-Carlo runs per query point
   unsigned threads = 0;  // 0: all cores
   std::uint64_t seed = 2021;
-  bool quantize = true;              // 4096-count encoders (false: ideal joint sensors), all variants
-  bool applied_torque_known = true;  // RunSpec::applied_torque_known, all variants
-  double delay_release_distance = -1.0;  // RunSpec::lqr_release_distance of the delay variants
+  bool quantize = true;                  // 4096-count encoders (false: ideal joint sensors), all variants
+  bool applied_command_reported = true;  // RunSpec::applied_command_reported, all variants
   int substeps = 0;                      // RunSpec::substeps, all variants
   double relinearize_tolerance = RunSpec{}.relinearize_tolerance;  // all variants
 };
@@ -165,19 +204,31 @@ struct GridStudy {
   std::array<double, kNumVariants> lowest_k_z1{}, highest_k_z1{}, lowest_k_zs{}, highest_k_zs{};
   int delay_runs = 0;          // runs of the delay variants
   int delay_runs_over_1mm = 0;  // of them, deeper than 1 mm or faulted (the tool was lost)
+  // Paper 001's CoS-D statistic is the deepest of its 90 delay runs; over ours the like of it is
+  // the quantile 1 - 1/91, where the deepest of 90 runs falls on average (a lost tool: infinite).
+  double delay_max_of_90_quantile = 0.0;  // m
+  std::array<double, kNumVariants> referee_max_penetration{};  // over all runs, m (the referee's)
+  std::array<double, kNumVariants> referee_max_energy{};       // the most one run gave the user, mJ
 };
 
-/// Every variant at every (query point, run) on options.threads threads; the delay variants run
-/// delay_gains. job_done (optional, thread-safe) is called after each (query point, run).
-GridStudy runGrid(const TauModel& model, const LqrWallGains& gains, const LqrWallGains& delay_gains,
+/// The study's two wall designs: the undelayed variants' and the delay variants' (designed for a
+/// command delay of delay_samples periods, TauPolicy::WallDesign::random_delay as it says).
+struct StudyDesigns {
+  TauPolicy::WallDesign undelayed, delayed;
+  int delay_samples = 3;
+};
+
+/// Every variant at every (query point, run) on options.threads threads, each thread with its own
+/// devices from product. job_done (optional, thread-safe) is called after each (query point, run).
+GridStudy runGrid(const TauModel& model, const TauProduct& product, const StudyDesigns& designs,
                   const GridOptions& options, const std::function<void()>& job_done = {});
 
 /// Both controllers at the workspace centre in one scenario with the seed of job 0 (Fig. 8, 9).
 struct CentreTraces {
   std::vector<TraceSample> lqr, spring;
 };
-CentreTraces centreTraces(const TauModel& model, const LqrWallGains& gains, Scenario scenario,
-                          std::uint64_t base_seed);
+CentreTraces centreTraces(const TauModel& model, const TauProduct& product, const TauPolicy::WallDesign& design,
+                          Scenario scenario, std::uint64_t base_seed);
 
 /// Paper 001's published numbers (Table IV, the fastest pole, the requirements of section III, CoS-D)
 /// next to the measured ones. Our geometry and masses differ from the real TAU (unpublished), so the
