@@ -12,6 +12,7 @@ using namespace uhaptics;
 namespace {
 using rhi_test::randomConfiguration;
 using rhi_test::rhi4;
+using rhi_test::rhi4Product;
 bool withinLimits(const Vec<4>& tau, const Vec<4>& limits) {
   return tau.allFinite() && (tau.cwiseAbs().array() <= limits.array() + 1e-12).all();
 }
@@ -238,8 +239,8 @@ TEST_CASE("stiff ellipsoid gives more force along u than the free one over the w
 }
 
 TEST_CASE("the transition removes the jump in the null-space torque") {
-  const auto smooth = rhi::runTransition(rhi4(), true);
-  const auto abrupt = rhi::runTransition(rhi4(), false);
+  const auto smooth = rhi::runTransition(rhi4(), rhi4Product(), true);
+  const auto abrupt = rhi::runTransition(rhi4(), rhi4Product(), false);
   // Both runs switch to the stiff ellipsoid and back.
   auto reached = [](const rhi::TransitionRun& r, double omega) {
     for (const auto& s : r.samples)
@@ -272,8 +273,8 @@ TEST_CASE("3-DoF example: stiff ellipsoid renders F_e without saturation, free o
 }
 
 TEST_CASE("palpation: stiff ellipsoid is stronger and heavier along u, both within the joint limits") {
-  const auto free_case = rhi::runPalpation(rhi4(), FmeEllipsoidMode::kFree, {}, 3);
-  const auto stiff_case = rhi::runPalpation(rhi4(), FmeEllipsoidMode::kStiff, {}, 3);
+  const auto free_case = rhi::runPalpation(rhi4(), rhi4Product(), FmeEllipsoidMode::kFree, {}, 3);
+  const auto stiff_case = rhi::runPalpation(rhi4(), rhi4Product(), FmeEllipsoidMode::kStiff, {}, 3);
   CHECK(stiff_case.peak_force > 1.2 * free_case.peak_force);
   // The rendered force saturates at the static capability of the settled configuration (alpha
   // scaling keeps it there; 2 % covers the configuration drift during the push).

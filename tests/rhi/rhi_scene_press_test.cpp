@@ -24,8 +24,8 @@ PressResult pressFromHome(const rhi::Rhi4Controller::Options& options) {
   m.forward(m.homeJoints(), home_tip);
   rhi::PalpationSetup setup;
   setup.x0 = home_tip + Vec2(0.0, 0.02);  // the scene's tissue top, 2 cm "below" home along u = +y
-  rhi::ClosedLoop loop(m, options, setup);
-  loop.device().reset(m.homeJoints());
+  rhi::ClosedLoop loop(m, rhi_test::rhi4Product(), options, setup);
+  loop.reset(m.homeJoints());
   // The scene's hand path in workspace radii (0.1 m) of the device frame (task x -> y, task y -> -z).
   ScriptedHandOptions hand_options;
   hand_options.waypoints = {Vec3(0.0, -0.4, 0.1), Vec3(0.0, -0.4, -0.55), Vec3(0.0, -0.4, 0.1)};

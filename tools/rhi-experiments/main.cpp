@@ -7,6 +7,8 @@
 #include <fstream>
 #include <iostream>
 
+#include "device_servo_renderers.hpp"  // the devices' policy factory (tools/servo)
+#include "uhaptics/backends/board_catalog.hpp"
 #include "uhaptics/backends/params_location.hpp"
 #include "uhaptics/experiments/parallel.hpp"
 #include "uhaptics/experiments/reproduction.hpp"
@@ -118,7 +120,11 @@ int main(int argc, char** argv) {
     const Rhi4Model model = rhi::loadRhi4(params);
     const Planar3Model arm3 = rhi::loadPlanar3(params);
     tools::ensureDirectory(out);  // after the parameter files are read: a refused file leaves no folder
-    const rhi::Studies studies = rhi::runStudies(model, arm3, {trials, full ? 0.01 : 0.025, threads});
+    // The closed-loop studies run the product: the RHI's policy from the devices' factory.
+    const DeviceDefinition& rhi_device = findDevice("rhi");
+    const experiments::DeviceProduct product{[&] { return makeDevicePolicy(rhi_device, params); },
+                                             boardSpec(rhi_device, params)};
+    const rhi::Studies studies = rhi::runStudies(model, product, arm3, {trials, full ? 0.01 : 0.025, threads});
 
     // 3-DoF example (Fig. 3-4).
     writeExample(studies.example, arm3, out);

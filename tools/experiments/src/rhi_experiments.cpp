@@ -185,8 +185,34 @@ ExampleResult runExample3(const Planar3Model& model, double duration, double dt)
 }
 
 // ---- closed loop -------------------------------------------------------------------------------
-ClosedLoop::ClosedLoop(const Rhi4Model& model, const Rhi4Controller::Options& options, const PalpationSetup& setup)
-    : setup_(setup), sim_(model, setup.substep), ctrl_(model, model.effortLimits(), model.homeJoints(), options) {}
+namespace {
+PlanarFmePolicy<4>& rhiPolicy(DevicePolicy* policy) {
+  auto* fme = dynamic_cast<PlanarFmePolicy<4>*>(policy);
+  if (fme == nullptr) throw Error("RHI experiments: the device's policy factory did not make the RHI's policy");
+  return *fme;
+}
+}  // namespace
+
+ClosedLoop::ClosedLoop(const Rhi4Model& model, const experiments::DeviceProduct& product,
+                       const Rhi4Controller::Options& options, const PalpationSetup& setup)
+    : setup_(setup),
+      sim_(model, setup.substep),
+      policy_(product.make_policy ? product.make_policy() : nullptr),
+      fme_(&rhiPolicy(policy_.get())),
+      servo_(*policy_, product.spec) {
+  // The paper's controller options in place of the policy's envelope: the protocol under test.
+  if (fme_->controller().setOptions(options) != Fault::kNone)
+    throw Error("RHI experiments: the policy's controller refuses the paper's options");
+  wall_point_ = fme_->modelToDevicePoint(Vec3(setup.x0.x(), setup.x0.y(), 0.0));
+  wall_normal_ = -fme_->modelToDeviceVector(Vec3(setup.u.x(), setup.u.y(), 0.0)).normalized();
+  reset(sim_.position());
+}
+
+void ClosedLoop::reset(const Vec4& q) {
+  sim_.reset(q);
+  servo_.reset(0);  // the sim backend's timing: the efforts act over the period after the reading
+  t_ = 0.0;
+}
 
 EndEffectorLoad ClosedLoop::handAt(const Vec2& anchor) const {
   EndEffectorLoad load;
@@ -199,18 +225,20 @@ EndEffectorLoad ClosedLoop::handAt(const Vec2& anchor) const {
 void ClosedLoop::tick(const Vec2& anchor, bool wall_on) { tick(handAt(anchor), wall_on); }
 
 void ClosedLoop::tick(const EndEffectorLoad& load, bool wall_on) {
-  const Vec4 q = sim_.position(), qd = sim_.velocity();
-  const Vec2 x = sim_.endEffectorPosition();
-  const double penetration = (x - setup_.x0).dot(setup_.u);
-  force_ = wall_on && penetration > 0.0 ? Vec2(-setup_.wall_stiffness * penetration * setup_.u) : Vec2::Zero();
-  ctrl_.tick(t_, q, qd, force_, tau_);
+  // The joint sensors as the board reports them (the RHI's are ideal: BoardSpec resolution 0).
+  const SensedState& sensed = servo_.sense(sim_.position().data());
+  const double penetration = (wall_point_ - sensed.position).dot(wall_normal_);
+  const Vec3 force = wall_on && penetration > 0.0 ? Vec3(setup_.wall_stiffness * penetration * wall_normal_)
+                                                  : Vec3::Zero();
+  force_ = deviceToPlanar(force);
+  servo_.render(force, tau_.data());  // a fault sends zero, as on the device
   sim_.setLoad(load);
   sim_.step(tau_, setup_.servo_dt);
   t_ += setup_.servo_dt;
 }
 
 LoopSample ClosedLoop::sample() const {
-  const auto& st = ctrl_.status();
+  const auto& st = fme_->controller().status();
   return {t_, sim_.endEffectorPosition(), st.force, force_.norm(), tau_, st.tau_null, st.tau_null_command,
           st.tau_limit_command, sim_.model().jointLimits().distance(sim_.position()), st.observer, st.omega, st.cost,
           st.alpha};
@@ -220,15 +248,16 @@ namespace {
 // The device arrives at x_start under the controller under test: it starts from the match of that
 // controller's ellipsoid there (the stiff one for case B, eps = 1; the free one otherwise), within
 // the joint limits, and settles for settle_time.
-ClosedLoop settledLoop(const Rhi4Model& model, const Rhi4Controller::Options& options, const PalpationSetup& setup,
-                       const Vec2& x_start, double settle_time, double* limit_distance = nullptr) {
-  ClosedLoop loop(model, options, setup);
+ClosedLoop settledLoop(const Rhi4Model& model, const experiments::DeviceProduct& product,
+                       const Rhi4Controller::Options& options, const PalpationSetup& setup, const Vec2& x_start,
+                       double settle_time, double* limit_distance = nullptr) {
+  ClosedLoop loop(model, product, options, setup);
   Vec4 q_start;
   const auto& ctrl = loop.controller();
   const Mat2& target = options.mode == FmeEllipsoidMode::kStiff ? ctrl.stiffEllipsoid() : ctrl.freeEllipsoid();
   if (!matchedConfiguration(model, x_start, target, q_start))
     throw Error("palpation: no configuration within the joint limits reaches the start point");
-  loop.device().reset(q_start);
+  loop.reset(q_start);
   const long n = std::lround(settle_time / setup.servo_dt);
   for (long k = 0; k < n; ++k) {
     loop.tick(x_start, false);
@@ -264,7 +293,8 @@ ReflectedAlong reflectedAlong(const Rhi4Model& model, const Vec4& q, const Vec4&
 }
 }  // namespace
 
-PalpationCase runPalpation(const Rhi4Model& model, FmeEllipsoidMode mode, const PalpationSetup& setup, int trials) {
+PalpationCase runPalpation(const Rhi4Model& model, const experiments::DeviceProduct& product, FmeEllipsoidMode mode,
+                           const PalpationSetup& setup, int trials) {
   PalpationCase pc;
   pc.name = mode == FmeEllipsoidMode::kStiff ? "stiff" : "free";
   const auto options = paperOptions(mode, setup.u);
@@ -272,7 +302,7 @@ PalpationCase runPalpation(const Rhi4Model& model, FmeEllipsoidMode mode, const 
 
   // 1. Reconfigure at x0, then push into the wall with the hand: anchor ramps 3 cm along u.
   pc.limit_distance = std::numeric_limits<double>::infinity();
-  ClosedLoop loop = settledLoop(model, options, setup, setup.x0, setup.settle_time,
+  ClosedLoop loop = settledLoop(model, product, options, setup, setup.x0, setup.settle_time,
                                 &pc.limit_distance);
   pc.q_settled = loop.device().position();
   Mat<2, 4> J;
@@ -306,7 +336,7 @@ PalpationCase runPalpation(const Rhi4Model& model, FmeEllipsoidMode mode, const 
   // paused gradient measures.
   const Mat2 across = Mat2::Identity() - setup.u * setup.u.transpose();
   std::vector<MotionForceSample> data, backdrive;
-  ClosedLoop id = settledLoop(model, options, setup, setup.x0, setup.settle_time);
+  ClosedLoop id = settledLoop(model, product, options, setup, setup.x0, setup.settle_time);
   {
     auto paused = options;
     paused.beta = 0.0;
@@ -520,12 +550,13 @@ std::vector<WorkspacePoint> workspaceRatioMap(const Rhi4Model& model, double ste
 }
 
 // ---- transition -------------------------------------------------------------------------------
-TransitionRun runTransition(const Rhi4Model& model, bool smooth, const PalpationSetup& setup) {
+TransitionRun runTransition(const Rhi4Model& model, const experiments::DeviceProduct& product, bool smooth,
+                            const PalpationSetup& setup) {
   TransitionRun run;
   run.smooth = smooth;
   auto options = paperOptions(FmeEllipsoidMode::kAuto, setup.u);
   options.transition.smooth = smooth;
-  ClosedLoop loop = settledLoop(model, options, setup, setup.x0, setup.settle_time);
+  ClosedLoop loop = settledLoop(model, product, options, setup, setup.x0, setup.settle_time);
   run.transition_duration =
       options.transition.rho * (loop.controller().freeEllipsoid() - loop.controller().stiffEllipsoid()).norm();
   // Hold, press 3 cm into the wall (the demand exceeds the free configuration's capability), hold,
@@ -590,18 +621,19 @@ WorkspaceSummary summarize(const std::vector<WorkspacePoint>& map) {
   return w;
 }
 
-Studies runStudies(const Rhi4Model& model, const Planar3Model& arm3, const StudyOptions& options) {
+Studies runStudies(const Rhi4Model& model, const experiments::DeviceProduct& product, const Planar3Model& arm3,
+                   const StudyOptions& options) {
   Studies s;
   s.home = homeScales(model);
   s.example = runExample3(arm3);
-  s.free_case = runPalpation(model, FmeEllipsoidMode::kFree, {}, options.trials);
-  s.stiff_case = runPalpation(model, FmeEllipsoidMode::kStiff, {}, options.trials);
+  s.free_case = runPalpation(model, product, FmeEllipsoidMode::kFree, {}, options.trials);
+  s.stiff_case = runPalpation(model, product, FmeEllipsoidMode::kStiff, {}, options.trials);
   s.map_step = options.map_step;
   s.map_radius = 0.95 * model.reach();
   s.map = workspaceRatioMap(model, s.map_step, s.map_radius, Vec2(0.0, 1.0), options.threads);
   s.workspace = summarize(s.map);
-  s.smooth = runTransition(model, true);
-  s.abrupt = runTransition(model, false);
+  s.smooth = runTransition(model, product, true);
+  s.abrupt = runTransition(model, product, false);
   return s;
 }
 

@@ -2,6 +2,12 @@
 // Paper 003's studies on the simulated 4-DoF RHI and the 3-DoF example arm, and the paper's published
 // numbers with the checks against them (reproductionTable). Computation only (no files):
 // uhaptics-rhi-experiments writes the CSV/PNG, tests/rhi checks the numbers.
+//
+// The closed-loop studies run the product: the RHI's DevicePolicy (a PlanarFmePolicy<4>) from the
+// device's factory, with the paper's controller options, run by PolicyServo on what the board
+// senses (its joint sensors, the shared rate estimator); the scene's wall force comes from the
+// sensed end effector. The simulated device's truth feeds only the measurements (positions, the
+// force sensor of the identification, joint-limit distances).
 #include <array>
 #include <cstddef>
 #include <limits>
@@ -9,9 +15,11 @@
 #include <vector>
 
 #include "uhaptics/backends/simulated_planar_linkage.hpp"
+#include "uhaptics/experiments/policy_servo.hpp"
 #include "uhaptics/experiments/reproduction.hpp"
 #include "uhaptics/models/planar_linkage_model.hpp"
 #include "uhaptics/renderers/fme_null_space_controller.hpp"
+#include "uhaptics/renderers/planar_fme_policy.hpp"
 
 namespace uhaptics::rhi {
 
@@ -76,25 +84,33 @@ struct LoopSample {
   double observer, omega, nu, alpha;
 };
 
+/// The RHI's policy from product (its factory makes a PlanarFmePolicy<4>) on the simulated model.
 class ClosedLoop {
  public:
-  ClosedLoop(const Rhi4Model& model, const Rhi4Controller::Options& options, const PalpationSetup& setup);
+  /// Throws Error when product's policy is not the RHI's, or its controller refuses options.
+  ClosedLoop(const Rhi4Model& model, const experiments::DeviceProduct& product, const Rhi4Controller::Options& options,
+             const PalpationSetup& setup);
+  /// The device at rest at q and a new session of the policy (set-up).
+  void reset(const Vec4& q);
   /// Hand anchored at `anchor` (isotropic spring-damper), wall on or off, one servo period.
   void tick(const Vec2& anchor, bool wall_on);
   /// Same with an arbitrary end-effector load (identification pushes).
   void tick(const EndEffectorLoad& load, bool wall_on);
   LoopSample sample() const;
-  SimulatedPlanarLinkage<4>& device() noexcept { return sim_; }
-  Rhi4Controller& controller() noexcept { return ctrl_; }
+  const SimulatedPlanarLinkage<4>& device() const noexcept { return sim_; }
+  Rhi4Controller& controller() noexcept { return fme_->controller(); }
   double time() const noexcept { return t_; }
   EndEffectorLoad handAt(const Vec2& anchor) const;
 
  private:
   PalpationSetup setup_;
   SimulatedPlanarLinkage<4> sim_;
-  Rhi4Controller ctrl_;
+  std::unique_ptr<DevicePolicy> policy_;
+  PlanarFmePolicy<4>* fme_;
+  experiments::PolicyServo servo_;
+  Vec3 wall_point_, wall_normal_;  // the wall: at x0, normal -u, device frame
   double t_ = 0.0;
-  Vec2 force_ = Vec2::Zero();
+  Vec2 force_ = Vec2::Zero();  // the scene's, task frame
   Vec4 tau_ = Vec4::Zero();
 };
 
@@ -127,8 +143,8 @@ struct PalpationCase {
   std::vector<LoopSample> push;     // the palpation run
   std::vector<IdentificationTrial> trials;
 };
-PalpationCase runPalpation(const Rhi4Model& model, FmeEllipsoidMode mode, const PalpationSetup& setup = {},
-                           int trials = 10);
+PalpationCase runPalpation(const Rhi4Model& model, const experiments::DeviceProduct& product, FmeEllipsoidMode mode,
+                           const PalpationSetup& setup = {}, int trials = 10);
 
 // ---- Fig. 10: workspace map of the force-capability ratio ---------------------------------------
 /// Why a point's stiff/free ratio is what it is. Where the ratio comes out <= 1, a dense scan of the
@@ -174,7 +190,8 @@ struct TransitionRun {
   double max_applied_null_jump = 0.0;  // of the applied null-space torque (after the limit scaling)
   double transition_duration = 0.0;   // rho |M_free - M_stiff|_F [s]
 };
-TransitionRun runTransition(const Rhi4Model& model, bool smooth, const PalpationSetup& setup = {});
+TransitionRun runTransition(const Rhi4Model& model, const experiments::DeviceProduct& product, bool smooth,
+                            const PalpationSetup& setup = {});
 
 // ---- all of paper 003's studies, their checks and summary ------------------------------------------
 /// The controller's ellipsoid scales at home (mu = 5): K = mu lambda_max(M_hat_0), zeta = lambda_min / mu.
@@ -207,7 +224,8 @@ struct Studies {
   TransitionRun smooth, abrupt;           // Fig. 11
 };
 /// Every study at the paper's settings: the map over 0.95 of the reach.
-Studies runStudies(const Rhi4Model& model, const Planar3Model& arm3, const StudyOptions& options = {});
+Studies runStudies(const Rhi4Model& model, const experiments::DeviceProduct& product, const Planar3Model& arm3,
+                   const StudyOptions& options = {});
 
 /// Paper 003's published numbers next to the measured ones, with the checks that decide pass/fail.
 experiments::ReproductionTable reproductionTable(const Studies& studies);
