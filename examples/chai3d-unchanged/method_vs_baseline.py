@@ -131,7 +131,7 @@ def write(out, table, rows, claims):
             ratio = c["method"] / c["baseline"] if c["baseline"] != 0.0 else math.nan  # NaN stays NaN
             writer.writerow(["chai3d", f"{c['example']} with {c['device']} ({c['backend']}): {c['figure']}, method over "
                              f"baseline ({fmt(c['method'])} / {fmt(c['baseline'])})", "nan", ratio,
-                             f"method {c['op']} {c['factor']} x baseline", 1 if c["pass"] else 0, "ratio", ""])
+                             f"method {c['op']} {c['factor']} x baseline", "pass" if c["pass"] else "FAIL", "ratio", ""])
     print("\n".join(lines))
     return lines
 
