@@ -99,6 +99,27 @@ class SampleOnRequestBoard final : public Transport {
 
 }  // namespace
 
+TEST_CASE("the emulated device rests until the host first enables its outputs, then moves", "[servo][e2e]") {
+  // The TAU with no torque sinks under gravity: a board's start-up (handshake, a servo thread locking
+  // its memory) must not hand the session a device that has been falling meanwhile.
+  const DeviceCase& c = kTau;
+  Rig rig(c, handDrivenConfig(c));
+  std::vector<double> boot(static_cast<std::size_t>(rig.plant->jointCount())), now(boot.size());
+  rig.plant->readJoints(boot.data());
+  rig.loop.connect();
+  std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  rig.board.service();  // 50 of the board's sample periods, outputs never enabled
+  rig.plant->readJoints(now.data());
+  CHECK(now == boot);
+  run(rig, 50, c.actuators());  // zero efforts, outputs enabled: gravity acts from now on
+  std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  rig.board.service();
+  rig.plant->readJoints(now.data());
+  double moved = 0.0;
+  for (std::size_t i = 0; i < boot.size(); ++i) moved = std::max(moved, std::abs(now[i] - boot[i]));
+  CHECK(moved > 1e-3);  // rad: the unpowered TAU has sagged
+}
+
 TEST_CASE("phase lock: a board that samples on request is left alone, its period not stretched", "[servo][e2e]") {
   const DeviceCase& c = kTau;
   ServoConfig cfg = handDrivenConfig(c);

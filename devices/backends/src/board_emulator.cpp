@@ -51,7 +51,10 @@ void BoardEmulator::advanceLocked(Clock::time_point now) noexcept {
         zeroOutputsLocked();
       }
     }
-    plant_.advance(dt);
+    // Until the host first enables the outputs the device rests as it booted (held by its user
+    // while the application starts): a plant left to fall under gravity through the host's start-up
+    // would hand the session a device in free fall, not the one its user holds.
+    if (started_) plant_.advance(dt);
     plant_.readJoints(samples_.data());
     sample_time_us_.fill(boardMicros(plant_time_));
   }
@@ -135,6 +138,7 @@ void BoardEmulator::handleLocked(const wire::Frame& in, Clock::time_point now) n
         last_command_time_ = now;
         last_command_sequence_ = in.sequence;
         outputs_enabled_ = in.command.mode == wire::CommandMode::kEffort;
+        started_ = started_ || outputs_enabled_;
         bool clamped = false;
         for (int i = 0; i < plant_.actuatorCount(); ++i) {
           double u = outputs_enabled_ ? static_cast<double>(in.command.values[i]) : 0.0;

@@ -286,6 +286,10 @@ bool cUhapticsDevice::open() {
     m_io = makeJointIo();
     m_servoArmed.store(false);  // a board's servo thread sends zero until the policy is reset
     m_rateEstimator.setResolution(m_io->spec().position_resolution.data(), m_joints);
+    // Over the board protocol a command acts a period after its reading: the policy is designed for
+    // it before the board starts (an LQR design takes tens of ms, and until the policy is armed the
+    // servo thread commands zero: the device would sag meanwhile).
+    m_policy->reset(m_io->commandDelayPeriods());
     m_io->open();  // throws with what to do: no board found (and what was), permission, version
     const uhaptics::DeviceDescriptor& d = m_io->spec().descriptor;
     if (d.joints != m_joints || d.actuators != m_actuators) {
@@ -294,8 +298,6 @@ bool cUhapticsDevice::open() {
                             std::to_string(m_joints) + " and " + std::to_string(m_actuators));
     }
     if (m_passive != nullptr) configurePassivityLocked();
-    // Over the board protocol a command acts a period after its reading: the policy is designed for it.
-    m_policy->reset(m_io->commandDelayPeriods());
     m_ticks = 0;
     m_lastFault = uhaptics::Fault::kNone;
     m_stats.start(wallTime());

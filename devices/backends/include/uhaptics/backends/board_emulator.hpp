@@ -105,6 +105,7 @@ class BoardEmulator final : public Transport {
   bool configured_ = false, outputs_enabled_ = false, just_reset_ = true,  // just_reset_: boot until HELLO
        watchdog_tripped_ = false;
   bool plugged_ = true;
+  bool started_ = false;  // the outputs were enabled once: the plant integrates from then on
   std::uint8_t version_ = wire::kProtocolVersion;
   std::uint32_t watchdog_us_ = 0;
   std::uint16_t tx_sequence_ = 0, last_command_sequence_ = 0;
