@@ -446,6 +446,27 @@ TEST_CASE("Contact classifier: a wall saturated for 20 ticks hands the contact t
   CHECK(tally.overloads == 1);
 }
 
+TEST_CASE("Contact classifier: an overloaded wall keeps a surface stiffer than the device's rated spring", "[tau][classifier]") {
+  // On a board one period late the TAU's spring is rated 2200 N/m: a 4800 N/m surface handed to it
+  // bounces the tool into a limit cycle, so the saturated wall keeps the contact.
+  Classifier c({});
+  c.setSpringLimit(0.5 * Plane{}.stiffness);
+  Plane plane;
+  Tally tally;
+  const Approach a = approach(c, plane, tally);
+  REQUIRE(c.state() == State::kLqr);
+  REQUIRE(c.stiffness() > c.options().spring_limit);
+  const Vec3 f = plane.force(a.tool, Vec3::Zero());
+  for (int i = 0; i < 100; ++i) tick(c, f, a.tool, tally, Mode::kAuto, true);
+  CHECK(tally.overloads == 0);
+  CHECK(c.state() == State::kLqr);
+  // A limit above the surface's stiffness (the spring renders it passively): handed over as before.
+  c.setSpringLimit(2.0 * c.stiffness());
+  for (int i = 0; i < 21; ++i) tick(c, f, a.tool, tally, Mode::kAuto, true);
+  CHECK(tally.overloads == 1);
+  CHECK(c.state() == State::kSpring);
+}
+
 TEST_CASE("Contact classifier: non-finite input never engages and leaves a sane state", "[tau][classifier]") {
   const double nan = std::numeric_limits<double>::quiet_NaN();
   const double inf = std::numeric_limits<double>::infinity();

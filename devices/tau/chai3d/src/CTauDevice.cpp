@@ -3,18 +3,29 @@
 #include <algorithm>
 #include <cmath>
 
+#include "uhaptics/backends/board_catalog.hpp"
+#include "uhaptics/backends/device_definition.hpp"
 #include "uhaptics/backends/tau_plant.hpp"
 
 namespace chai3d {
 namespace {
 
-uhaptics::TauPolicy::Options policyOptions(const uhaptics::DeviceSelection& a_selection, double a_servoPeriod) {
+uhaptics::TauPolicy::Options policyOptions(const uhaptics::DeviceSelection& a_selection, double a_servoPeriod,
+                                           const std::string& a_paramsDirectory) {
   uhaptics::TauPolicy::Options options;
   options.classifier.stiff_threshold = a_selection.option("stiff_threshold", 3000.0, 1.0, 1e6);
   options.classifier.contact_force = a_selection.option("contact_force", 0.3, 0.01, 10.0);
   options.classifier.release_ticks =
       static_cast<int>(std::lround(a_selection.option("release_time", 0.05, 0.001, 1.0) / a_servoPeriod));
   options.wall_mode = static_cast<uhaptics::TauPolicy::WallMode>(static_cast<int>(a_selection.option("wall", 0.0, 0.0, 2.0)));
+  // The rated spring walls at 1 kHz (the parameter file's stability section), per command delay.
+  const uhaptics::BoardSpec spec = uhaptics::boardSpec(uhaptics::findDevice("tau"), a_paramsDirectory);
+  const std::size_t rate = static_cast<std::size_t>(
+      std::find_if(uhaptics::kRatedServoRatesHz.begin(), uhaptics::kRatedServoRatesHz.end(),
+                   [a_servoPeriod](double hz) { return std::abs(hz * a_servoPeriod - 1.0) < 1e-9; }) -
+      uhaptics::kRatedServoRatesHz.begin());
+  if (rate < uhaptics::kRatedServoRatesHz.size())
+    options.rated_spring = {spec.rated_stiffness[rate], spec.rated_stiffness_delayed[rate]};
   return options;
 }
 
@@ -27,7 +38,7 @@ cTauDevice::cTauDevice(unsigned int a_deviceNumber, const uhaptics::DeviceSelect
   if (std::abs(model.servoPeriod() - getServoPeriod()) > 1e-12) {
     throw uhaptics::Error("TAU parameter file: the servo period must be 1 ms (the LQR wall is designed for it)");
   }
-  auto policy = std::make_unique<uhaptics::TauPolicy>(std::move(model), policyOptions(a_selection, getServoPeriod()),
+  auto policy = std::make_unique<uhaptics::TauPolicy>(std::move(model), policyOptions(a_selection, getServoPeriod(), paramsDirectory()),
                                                       sessionStats());
   m_tau = policy.get();
   const uhaptics::TauModel& tau = m_tau->model();

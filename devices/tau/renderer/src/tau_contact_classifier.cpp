@@ -92,6 +92,10 @@ void TauContactClassifier::reset() noexcept {
   surface_ = SurfaceContact{};
 }
 
+void TauContactClassifier::setSpringLimit(double limit) noexcept {
+  options_.spring_limit = limit > 0.0 ? limit : std::numeric_limits<double>::infinity();
+}
+
 void TauContactClassifier::release() noexcept {
   if (state_ == State::kLqr) events_.released = true;
   state_ = State::kFree;
@@ -255,7 +259,7 @@ void TauContactClassifier::update(const Vec3& force_in, const Vec3& position_in,
     quiet_ticks_ = out ? quiet_ticks_ + 1 : 0;
     if (quiet_ticks_ >= options_.release_ticks) {
       release();
-    } else if (state_ == State::kLqr && overload_ticks_ >= kOverloadTicks) {
+    } else if (state_ == State::kLqr && overload_ticks_ >= kOverloadTicks && stiffness_ <= options_.spring_limit) {
       release();
       state_ = State::kSpring;
       events_.overload = true;

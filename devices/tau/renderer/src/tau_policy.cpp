@@ -12,6 +12,7 @@ TauPolicy::TauPolicy(TauModel model, const Options& options, FigureRecorder& fig
     : model_(std::make_unique<const TauModel>(std::move(model))),
       figures_(figures),
       wall_mode_(static_cast<int>(options.wall_mode)),
+      rated_spring_(options.rated_spring),
       classifier_([&] {
         TauContactClassifier::Options o = options.classifier;
         o.servo_period = model_->servoPeriod();
@@ -69,6 +70,7 @@ void TauPolicy::reset(int command_delay) {
   for (Vec6& sent : sent_) sent.setZero();
   data_->pose = model_->homePose();  // forward kinematics' first guess
   classifier_.reset();
+  classifier_.setSpringLimit(rated_spring_[command_delay > 0 ? 1 : 0]);
   lqr_engaged_ = false;
   tau_.setZero();
 }

@@ -44,11 +44,15 @@
 // light hand) -- force below half of contact_force, or below 0.05 N while the wall holds the tool (a
 // plane above the surface). A renewed push before then is held again at once, without a new probe.
 // A wall saturated for 20 ms without a break cannot hold the contact: the spring takes it over
-// (Events::overload, with Events::released).
+// (Events::overload, with Events::released), if the spring can render the measured surface stably
+// (k within Options::spring_limit, the device's rated spring at its command delay). A stiffer surface
+// stays with the wall: the spring would only bounce the tool into a growing limit cycle, which on a
+// board one period late a contact that never goes quiet for release_ticks does not leave.
 //
 // A surface the application knows (follow()) replaces the one read from the force: while active,
 // the LQR wall owns the contact whatever the wall mode.
 #include <array>
+#include <limits>
 
 #include "uhaptics/core/types.hpp"
 #include "uhaptics/renderers/tau_wall_front_end.hpp"
@@ -68,6 +72,9 @@ class TauContactClassifier {
     int release_ticks = 50;             // servo ticks the application feels no contact before it ends
     double nominal_stiffness = 6000.0;  // N/m: places the proxy until the probe has measured k
     double servo_period = 1e-3;         // s
+    // N/m: the stiffest spring the device renders passively at its command delay (its rating); an
+    // overloaded wall hands only surfaces within it to the spring. Infinite: no limit.
+    double spring_limit = std::numeric_limits<double>::infinity();
   };
 
   /// What happened on this servo tick (update()/follow() clear it, wallTicked() completes it).
@@ -94,6 +101,9 @@ class TauContactClassifier {
   explicit TauContactClassifier(const Options& options);
   /// No contact, nothing measured (the backend starts).
   void reset() noexcept;
+  /// Options::spring_limit, for the command delay a session starts with (set-up code; a value
+  /// that is not > 0 is no limit).
+  void setSpringLimit(double limit) noexcept;
 
   /// Per servo tick, before the wall renderer: the application's force and the tool position it was
   /// computed at (model frame). A non-finite force or position is read as no force at the last

@@ -60,6 +60,10 @@ class TauPolicy final : public DevicePolicy {
   struct Options {
     TauContactClassifier::Options classifier;  // servo_period is the model's; nominal_stiffness kSpringWallStiffness
     WallMode wall_mode = WallMode::kAuto;
+    // N/m: the device's rated spring wall [with the command in its period, one period late]
+    // (BoardSpec::rated_stiffness at the servo rate): reset() gives the classifier the one for its
+    // delay as its spring_limit. NaN or <= 0: no limit.
+    std::array<double, 2> rated_spring = {0.0, 0.0};
   };
 
   /// How the LQR wall is designed and run (designLqrWall, LqrWallRenderer::Options); the defaults
@@ -133,6 +137,7 @@ class TauPolicy final : public DevicePolicy {
   std::unique_ptr<TauData> data_;  // the encoders' pose: what the wall and the scene see
   Vec3 centre_ = Vec3::Zero();
   std::atomic<int> wall_mode_;
+  const std::array<double, 2> rated_spring_;  // Options::rated_spring
   std::atomic<bool> lqr_engaged_{false};
   TauContactClassifier classifier_;  // who renders the contact; the wall's plane (model frame)
   int fig_engagements_, fig_releases_, fig_held_ticks_, fig_entry_depth_, fig_max_penetration_,
