@@ -100,8 +100,8 @@ class SampleOnRequestBoard final : public Transport {
 }  // namespace
 
 TEST_CASE("the emulated device rests until the host first enables its outputs, then moves", "[servo][e2e]") {
-  // The TAU with no torque sinks under gravity: a board's start-up (handshake, a servo thread locking
-  // its memory) must not hand the session a device that has been falling meanwhile.
+  // The TAU with no torque sinks under gravity: a board's start-up (the handshake, the servo thread's
+  // start) must not hand the session a device that has been falling meanwhile.
   const DeviceCase& c = kTau;
   Rig rig(c, handDrivenConfig(c));
   std::vector<double> boot(static_cast<std::size_t>(rig.plant->jointCount())), now(boot.size());
