@@ -95,6 +95,8 @@ TEST_CASE("board backend: TAU on the emulated board moves by F / k_h against pap
   if (!uhaptics::kSanitizedBuild) CHECK(across < along);
   CHECK(run.largest_output > 0.0);
   CHECK(run.largest_output <= 2.0);  // the joints' 2 N m
+  // One period late, a saturated wall hands the spring only surfaces within the delayed rating.
+  CHECK(device->getSpringLimit() == 2200.0);  // tau.json: max_linear_stiffness_delayed at 1 kHz
 }
 
 TEST_CASE("board backend: RHI on the emulated board moves by F / k against the grip, null space running",

@@ -88,6 +88,11 @@ double cTauDevice::getContactStiffness() {
   return m_tau->contactStiffness();
 }
 
+double cTauDevice::getSpringLimit() {
+  std::lock_guard<std::mutex> lock(deviceMutex());
+  return m_tau->springLimit();
+}
+
 bool cTauDevice::getContactSurface(cVector3d& a_point, cVector3d& a_normal) {
   uhaptics::Vec3 point, normal;
   {

@@ -51,6 +51,9 @@ class cTauDevice : public cUhapticsDevice {
   double getLqrPenetration();
   /// The stiffness measured by the last contact's probe, device frame [N/m] (0 before any).
   double getContactStiffness();
+  /// The stiffest surface the spring takes over from a saturated LQR wall, device frame [N/m]: the
+  /// device's rated spring wall at its backend's command delay (set when the device opens).
+  double getSpringLimit();
   /// The wall's plane read from the force (a point on it and its outward unit normal, device frame
   /// [m]); false (outputs untouched) while there is none.
   bool getContactSurface(cVector3d& a_point, cVector3d& a_normal);

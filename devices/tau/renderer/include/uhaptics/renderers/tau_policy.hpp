@@ -115,6 +115,9 @@ class TauPolicy final : public DevicePolicy {
   double penetration() const noexcept { return lqr_->command().penetration; }
   /// The stiffness measured by the last contact's probe [N/m] (0 before any).
   double contactStiffness() const noexcept { return classifier_.stiffness(); }
+  /// The stiffest surface an overloaded wall hands to the spring [N/m]: Options::rated_spring for
+  /// the command delay reset() was given (infinity: no limit).
+  double springLimit() const noexcept { return classifier_.options().spring_limit; }
   /// The wall's plane (a point on it, device frame [m], and its outward unit normal); false
   /// (outputs untouched) while there is none.
   bool contactSurface(Vec3& point, Vec3& normal) const noexcept;
