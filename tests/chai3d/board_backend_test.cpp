@@ -37,6 +37,10 @@ struct Run {
   std::uint64_t faults = 0;
   std::uint64_t stale_input_ticks = 0;  // servo ticks whose application input was stale
   uhaptics::ServoCounters counters;
+  // The statistics' servo_timing while the session ran and once it was closed (kept).
+  bool timing_open = false, timing_closed = false;
+  std::uint64_t timing_samples = 0;
+  double nominal_period_us = 0.0, period_max_us = 0.0;
 };
 
 // The application's haptic loop in real time (about 1 kHz) for `seconds` with a constant force.
@@ -57,10 +61,16 @@ Run holdForce(const cUhapticsDevicePtr& device, const cVector3d& force, double s
   run.largest_output = stats.peak_output;
   run.faults = stats.faults;
   run.stale_input_ticks = stats.stale_input_ticks;
+  run.timing_open = stats.has_servo_timing;
   device->getServoLoop()->stop();  // counters are final
   run.counters = device->getServoLoop()->counters();
   REQUIRE(device->close());
   CHECK(device->getServoLoop() == nullptr);
+  const uhaptics::SessionStatsSnapshot closed = device->getSessionStats();
+  run.timing_closed = closed.has_servo_timing;
+  run.timing_samples = closed.servo_timing.samples;
+  run.nominal_period_us = closed.servo_timing.nominal_period_us;
+  run.period_max_us = closed.servo_timing.period.max_us;
   return run;
 }
 
@@ -69,6 +79,13 @@ void checkLink(const Run& run) {
   CHECK(run.counters.frames_lost == 0);
   CHECK(run.counters.frames_rejected == 0);
   CHECK(run.faults == 0);
+  // The session's statistics say how the servo thread kept its period, and keep it after close().
+  CHECK(run.timing_open);
+  CHECK(run.timing_closed);
+  // One period per servo tick after the first (a late wake-up is still one tick).
+  CHECK(run.timing_samples + 1 == run.counters.ticks);
+  CHECK(run.nominal_period_us == Approx(1000.0));
+  CHECK(run.period_max_us >= 0.5 * run.nominal_period_us);
 }
 
 }  // namespace

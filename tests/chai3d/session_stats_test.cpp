@@ -144,3 +144,26 @@ TEST_CASE("the referee's figures reach the JSON as an object, null where nothing
   CHECK_THAT(json, Catch::Contains("\"rendered_stiffness_N_per_m\": null,"));  // no hold: NaN -> null
   CHECK_THAT(json, Catch::EndsWith("}\n}\n"));
 }
+
+TEST_CASE("the board's servo timing reaches the JSON as an object, absent without a board",
+          "[chai3d][stats]") {
+  SessionStats stats;
+  stats.start(0.0);
+  uhaptics::SessionStatsSnapshot s = stats.snapshot(1.0);
+  CHECK_THAT(uhaptics::formatStatsJson(s, "tau", "sim", "x"), !Catch::Contains("servo_timing"));
+  s.has_servo_timing = true;
+  s.servo_timing.samples = 6489;
+  s.servo_timing.nominal_period_us = 1000.0;
+  s.servo_timing.period.max_us = 11371.5;
+  s.servo_timing.wake_latency.max_us = 10425.25;
+  s.servo_timing.overruns = 15;
+  s.servo_timing.missed_periods = 27;
+  const std::string json = uhaptics::formatStatsJson(s, "tau", "emulated", "x");
+  CHECK_THAT(json, Catch::Contains("\"servo_timing\": {"));
+  CHECK_THAT(json, Catch::Contains("\"samples\": 6489,"));
+  CHECK_THAT(json, Catch::Contains("\"period_max_us\": 11371.5,"));
+  CHECK_THAT(json, Catch::Contains("\"wake_latency_max_us\": 10425.25,"));
+  CHECK_THAT(json, Catch::Contains("\"overruns\": 15,"));
+  CHECK_THAT(json, Catch::Contains("\"missed_periods\": 27\n  }"));
+  CHECK_THAT(json, Catch::EndsWith("}\n}\n"));
+}

@@ -46,6 +46,7 @@ Result pushIntoBlock(cTauDevice::cWallMode mode, double stiffness) {
   }
   const uhaptics::SessionStatsSnapshot stats = device->getSessionStats();
   REQUIRE(stats.has_referee);
+  CHECK_FALSE(stats.has_servo_timing);  // lock-step sim: no servo thread to time
   result.contacts = stats.contacts;
   result.referee = stats.referee;
   return result;

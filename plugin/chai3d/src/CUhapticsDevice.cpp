@@ -291,6 +291,11 @@ bool cUhapticsDevice::open() {
     // servo thread commands zero: the device would sag meanwhile).
     m_policy->reset(m_io->commandDelayPeriods());
     m_io->open();  // throws with what to do: no board found (and what was), permission, version
+    {
+      std::lock_guard<std::mutex> timing(m_timingMutex);
+      m_timingLoop = m_io->servoLoop();
+      m_hasTiming = false;
+    }
     const uhaptics::DeviceDescriptor& d = m_io->spec().descriptor;
     if (d.joints != m_joints || d.actuators != m_actuators) {
       throw uhaptics::Error("'" + m_io->describe() + "' has " + std::to_string(d.joints) + " joints and " +
@@ -345,6 +350,7 @@ bool cUhapticsDevice::open() {
   } catch (const std::exception& e) {
     m_servoArmed.store(false);
     if (lock.owns_lock()) lock.unlock();  // the servo thread may be waiting for it to finish its period
+    detachServoTiming();
     if (m_io) m_io->close();  // nothing half-open: no servo thread, nothing commanded
     lock.lock();
     m_io.reset();
@@ -377,6 +383,7 @@ bool cUhapticsDevice::close() {
     m_policy->endSession();
     sessionClosed();
     lock.unlock();  // a servo period in progress finishes first
+    detachServoTiming();
     m_io->close();  // zero effort, servo thread stopped, interface released
     lock.lock();
     m_io.reset();
@@ -433,7 +440,23 @@ uhaptics::SessionStatsSnapshot cUhapticsDevice::getSessionStats() const {
     snapshot.has_referee = true;
     snapshot.referee = m_referee->latest();
   }
+  std::lock_guard<std::mutex> timing(m_timingMutex);
+  if (m_timingLoop != nullptr) {
+    m_lastTiming = m_timingLoop->timing();
+    m_hasTiming = true;
+  }
+  snapshot.has_servo_timing = m_hasTiming;
+  if (m_hasTiming) snapshot.servo_timing = m_lastTiming;
   return snapshot;
+}
+
+void cUhapticsDevice::detachServoTiming() {
+  std::lock_guard<std::mutex> timing(m_timingMutex);
+  if (m_timingLoop != nullptr) {
+    m_lastTiming = m_timingLoop->timing();  // the session's last word, kept for the final stats
+    m_hasTiming = true;
+  }
+  m_timingLoop = nullptr;
 }
 
 uhaptics::LinkStatus cUhapticsDevice::getLinkStatus() {

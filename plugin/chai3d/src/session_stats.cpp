@@ -232,6 +232,18 @@ std::string formatStatsJson(const SessionStatsSnapshot& stats, const std::string
     number(r.peak_user_force_N) << ",\n    \"peak_applied_force_N\": ";
     number(r.peak_applied_force_N) << "\n  }";
   }
+  if (stats.has_servo_timing) {
+    const TimingReport& t = stats.servo_timing;
+    out << ",\n  \"servo_timing\": {\n"
+        << "    \"samples\": " << t.samples << ",\n"
+        << "    \"nominal_period_us\": " << t.nominal_period_us << ",\n"
+        << "    \"period_p99_us\": " << t.period.p99_us << ",\n"
+        << "    \"period_max_us\": " << t.period.max_us << ",\n"
+        << "    \"wake_latency_p99_us\": " << t.wake_latency.p99_us << ",\n"
+        << "    \"wake_latency_max_us\": " << t.wake_latency.max_us << ",\n"
+        << "    \"overruns\": " << t.overruns << ",\n"
+        << "    \"missed_periods\": " << t.missed_periods << "\n  }";
+  }
   out << "\n}\n";
   return out.str();
 }

@@ -309,6 +309,8 @@ class cUhapticsDevice : public cGenericHapticDevice {
   const State& applicationState() const noexcept;
   double wallTime() const noexcept;
   void startStatsWriter();
+  /// The servo loop's timing so far into m_lastTiming, and no loop to read from here on (close()).
+  void detachServoTiming();
   void stopStatsWriter() noexcept;
   void writeStats(const std::string& a_path) noexcept;
   /// The hand recording's rows so far to m_recordPath (nothing before two rows).
@@ -336,6 +338,13 @@ class cUhapticsDevice : public cGenericHapticDevice {
   std::unique_ptr<uhaptics::HandRecorder> m_recorder;  // made with the device when m_recordPath is set
   const int m_joints, m_actuators;
   std::unique_ptr<uhaptics::JointIo> m_io;  // every backend; opened in open(), closed in close()
+  // The board's servo loop, for the statistics' servo_timing: read by the statistics writer and
+  // detached by close() before the loop goes, under m_timingMutex (never taken by the servo thread;
+  // the loop's timing is wait-free to read). m_lastTiming keeps the closed session's.
+  mutable std::mutex m_timingMutex;
+  uhaptics::ServoLoop* m_timingLoop = nullptr;
+  mutable bool m_hasTiming = false;
+  mutable uhaptics::TimingReport m_lastTiming;
   std::array<double, uhaptics::wire::kMaxChannels> m_positions{}, m_rates{}, m_efforts{};
   uhaptics::JointRateEstimator m_rateEstimator;  // every backend's rates
   bool m_sensedAfterAdvance = false;  // sim: the joints were read right after the last step

@@ -8,6 +8,7 @@
 #include <string>
 
 #include "uhaptics/backends/referee.hpp"
+#include "uhaptics/backends/servo_timing.hpp"
 #include "uhaptics/renderers/device_policy.hpp"
 
 namespace uhaptics {
@@ -54,6 +55,10 @@ struct SessionStatsSnapshot {
   /// in by the device that has one: has_referee false on usb or with the option "referee" 0.
   bool has_referee = false;
   RefereeReport referee;
+  /// The board's servo thread on the host (emulated, usb): its periods and how late it woke, so a
+  /// session says when the thread that renders it was held up. has_servo_timing false on sim.
+  bool has_servo_timing = false;
+  TimingReport servo_timing;
   /// The figure named name, or nullptr.
   const RendererFigure* figure(const std::string& name) const noexcept;
 };
