@@ -150,7 +150,8 @@ void starve(const std::string& name, BoardEmulator::Fault fault, const char* wha
   // Zero from the watchdog_periods-th period without a valid STATE. A loop that stalls that long
   // trips sooner, before its next tick has even missed a STATE (seen under the sanitizers' slowdown).
   if (trip->tick < missing->tick) {
-    CHECK(first(log, ServoEventKind::kLoopStalled) != nullptr);
+    const ServoEvent* stall = first(log, ServoEventKind::kLoopStalled, trip->tick - 1);
+    CHECK((stall != nullptr && stall->tick == trip->tick));  // the stall tripped it, in that period
   }
   const std::uint64_t periods_to_zero = trip->tick >= missing->tick ? trip->tick - missing->tick + 1 : 0;
   CHECK(periods_to_zero <= static_cast<std::uint64_t>(s.watchdog_periods));

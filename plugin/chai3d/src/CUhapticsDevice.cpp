@@ -294,7 +294,7 @@ bool cUhapticsDevice::open() {
     {
       std::lock_guard<std::mutex> timing(m_timingMutex);
       m_timingLoop = m_io->servoLoop();
-      m_hasTiming = false;
+      m_lastTiming.reset();
     }
     const uhaptics::DeviceDescriptor& d = m_io->spec().descriptor;
     if (d.joints != m_joints || d.actuators != m_actuators) {
@@ -441,21 +441,19 @@ uhaptics::SessionStatsSnapshot cUhapticsDevice::getSessionStats() const {
     snapshot.referee = m_referee->latest();
   }
   std::lock_guard<std::mutex> timing(m_timingMutex);
-  if (m_timingLoop != nullptr) {
-    m_lastTiming = m_timingLoop->timing();
-    m_hasTiming = true;
-  }
-  snapshot.has_servo_timing = m_hasTiming;
-  if (m_hasTiming) snapshot.servo_timing = m_lastTiming;
+  captureServoTimingLocked();
+  snapshot.has_servo_timing = m_lastTiming.has_value();
+  if (m_lastTiming) snapshot.servo_timing = *m_lastTiming;
   return snapshot;
+}
+
+void cUhapticsDevice::captureServoTimingLocked() const {
+  if (m_timingLoop != nullptr) m_lastTiming = m_timingLoop->timing();
 }
 
 void cUhapticsDevice::detachServoTiming() {
   std::lock_guard<std::mutex> timing(m_timingMutex);
-  if (m_timingLoop != nullptr) {
-    m_lastTiming = m_timingLoop->timing();  // the session's last word, kept for the final stats
-    m_hasTiming = true;
-  }
+  captureServoTimingLocked();  // the session's last word, kept for the final statistics
   m_timingLoop = nullptr;
 }
 

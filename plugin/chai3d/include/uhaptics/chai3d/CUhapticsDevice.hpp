@@ -72,6 +72,7 @@
 #include <condition_variable>
 #include <memory>
 #include <mutex>
+#include <optional>
 #include <string>
 #include <thread>
 #include <vector>
@@ -309,6 +310,8 @@ class cUhapticsDevice : public cGenericHapticDevice {
   const State& applicationState() const noexcept;
   double wallTime() const noexcept;
   void startStatsWriter();
+  /// The servo loop's timing so far into m_lastTiming (m_timingMutex held; no loop: unchanged).
+  void captureServoTimingLocked() const;
   /// The servo loop's timing so far into m_lastTiming, and no loop to read from here on (close()).
   void detachServoTiming();
   void stopStatsWriter() noexcept;
@@ -340,11 +343,10 @@ class cUhapticsDevice : public cGenericHapticDevice {
   std::unique_ptr<uhaptics::JointIo> m_io;  // every backend; opened in open(), closed in close()
   // The board's servo loop, for the statistics' servo_timing: read by the statistics writer and
   // detached by close() before the loop goes, under m_timingMutex (never taken by the servo thread;
-  // the loop's timing is wait-free to read). m_lastTiming keeps the closed session's.
+  // the loop's timing is wait-free to read). m_lastTiming keeps the closed session's; empty on sim.
   mutable std::mutex m_timingMutex;
   uhaptics::ServoLoop* m_timingLoop = nullptr;
-  mutable bool m_hasTiming = false;
-  mutable uhaptics::TimingReport m_lastTiming;
+  mutable std::optional<uhaptics::TimingReport> m_lastTiming;
   std::array<double, uhaptics::wire::kMaxChannels> m_positions{}, m_rates{}, m_efforts{};
   uhaptics::JointRateEstimator m_rateEstimator;  // every backend's rates
   bool m_sensedAfterAdvance = false;  // sim: the joints were read right after the last step
