@@ -51,6 +51,11 @@ class PointMassPolicy final : public uhaptics::DevicePolicy {
     out = input.force;
     return uhaptics::Fault::kNone;
   }
+  bool actuatedInertia(double* inertia) const override {
+    Eigen::Map<Eigen::Matrix3d> out(inertia);
+    out = PointMassPlant::kMass * Eigen::Matrix3d::Identity();
+    return true;
+  }
 };
 
 class PointMassDevice : public chai3d::cUhapticsDevice {

@@ -153,10 +153,9 @@ std::string taskSummaryText(const std::vector<DeviceTaskZWidth>& results) {
           const double late = taskStiffness(r, b.rate_hz, 1, passive) / taskStiffness(r, b.rate_hz, 1);
           appendf(out, "%-12s %8.0f %12.3g %12.3g\n", r.name.c_str(), b.rate_hz, now, late);
         }
-    appendf(out, "nan: nothing passive with the layer down to the search's floor. The observer keeps the energy the "
-                 "user's press stores in the wall on its balance, so it sees no net output while the wall rings during "
-                 "a hold; on the redundant linkages it charges the null-space control's work as output and damps the "
-                 "self-motion, which the tool feels (docs/stability.md).\n");
+    appendf(out, "nan: nothing passive with the layer down to the search's floor. The layer observes the scene's "
+                 "share of the command against the scene's own continuous-time work, so what the press stores does "
+                 "not hide a ring and the devices' own fields stay off its balance (docs/passivity.md).\n");
   }
   std::vector<double> rates;
   for (const DeviceTaskZWidth& r : results)
@@ -176,6 +175,21 @@ std::string taskSummaryText(const std::vector<DeviceTaskZWidth>& results) {
       appendf(out, "\n");
     }
   }
+  return out;
+}
+
+/// The passivity layer's check (checkPassivityLayer) as a table.
+std::string layerCheckText(const std::vector<TaskLayerCheck>& checks) {
+  std::string out;
+  if (checks.empty()) return out;
+  appendf(out, "\nThe spring wall at twice its K_max without the layer (passive: generated energy within the "
+               "tolerance, no bounce, the kick's ring decays):\n");
+  appendf(out, "%-12s %8s %6s %12s %14s %12s %14s %14s %6s\n", "device", "rate Hz", "delay", "K N/m", "layer=1",
+          "rendered/K", "generated uJ", "layer=2", "pass");
+  for (const TaskLayerCheck& c : checks)
+    appendf(out, "%-12s %8.0f %6d %12.4g %14s %12.3f %14.3g %14s %6s\n", c.device.c_str(), c.rate_hz, c.delay,
+            c.stiffness, toString(c.layered.outcome), c.layered.rendered_stiffness / c.stiffness,
+            1e6 * c.layered.generated_energy, toString(c.observed.outcome), c.pass() ? "yes" : "no");
   return out;
 }
 
@@ -366,6 +380,9 @@ int main(int argc, char** argv) {
     std::vector<DeviceTaskZWidth> task_results;
     if (!task_devices.empty()) task_results = sweepTaskZWidth(task_devices, task_options, [&] { progress.advance(); });
     progress.finish();
+    // The layer's check at the board's rate, where the sweep measured the spring without it.
+    const std::vector<TaskLayerCheck> layer_checks =
+        task_devices.empty() ? std::vector<TaskLayerCheck>{} : checkPassivityLayer(task_devices, task_results);
     const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     const double cpu = static_cast<double>(std::clock() - cpu0) / CLOCKS_PER_SEC;
 
@@ -397,7 +414,7 @@ int main(int argc, char** argv) {
                     r.name.c_str(), r.identification.mass, r.identification.damping, r.identification.frequency_hz,
                     r.hand_damping, r.force_capacity);
     std::string summary = joint_space ? summaryText(results, options) : std::string();
-    if (!task_results.empty()) summary += taskSummaryText(task_results);
+    if (!task_results.empty()) summary += taskSummaryText(task_results) + layerCheckText(layer_checks);
     std::printf("%s", summary.c_str());
     std::printf("%zu boundaries, %zu runs; wall time %.1f s on %u threads, CPU %.1f s\n", boundaries, runs, wall,
                 threads ? threads : hardwareThreads(), cpu);
@@ -410,6 +427,8 @@ int main(int argc, char** argv) {
     if (!task_results.empty()) {
       const ReproductionTable task_table = taskZWidthReproduction(task_devices, task_results);
       for (const ReproductionRow& row : task_table.rows()) table.add(row);
+      const ReproductionTable layer_table = passivityLayerReproduction(layer_checks);
+      for (const ReproductionRow& row : layer_table.rows()) table.add(row);
     }
     table.writeCsv(out + "/reproduction.csv");
     std::printf("\n%s\n", table.format().c_str());

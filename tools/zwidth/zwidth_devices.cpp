@@ -114,8 +114,9 @@ experiments::TaskZWidthDevice taskZWidthDevice(const DeviceDefinition& device, c
     d.native_rate_renderers = {"lqr"};
   }
   // The spring again with the passivity layer on, configured as the CHAI3D adapter configures it for
-  // this board (passivity_max_damping unset): measured at the board's rate, where its velocity guard
-  // (the estimator's resolution at the board's sampling) applies.
+  // this board (passivity_max_damping unset): measured at the board's rate, the one its policy and
+  // sensors are set up for. (spring + kObservedPassivitySuffix, the layer observing only, is run by
+  // the layer's check, not swept.)
   d.renderers.push_back(std::string("spring") + experiments::kPassivitySuffix);
   d.native_rate_renderers.push_back(d.renderers.back());
   const DeviceDefinition* definition = &device;  // registrations live for the program
@@ -126,15 +127,12 @@ experiments::TaskZWidthDevice taskZWidthDevice(const DeviceDefinition& device, c
       tau->setWallMode(renderer.compare(0, base, "lqr") == 0 ? TauPolicy::WallMode::kLqr
                                                              : TauPolicy::WallMode::kSpring);
     if (base == std::string::npos) return policy;
-    const int joint_count = spec.descriptor.joints, actuators = spec.descriptor.actuators;
     std::array<double, wire::kMaxChannels> rest{};
     make_rest_plant(1.0 / spec.servo_rate_hz)->readJoints(rest.data());
-    PassivePolicy::Options options;
-    options.actuators = actuators;
-    options.controller = boardPassivityOptions(spec);
-    const std::vector<double> caps = passivityDampingCaps(*policy, rest.data(), joint_count, actuators,
-                                                          spec.max_linear_damping, spec.max_angular_damping);
-    options.controller.max_damping_per_joint = Eigen::Map<const Eigen::VectorXd>(caps.data(), actuators);
+    ScenePortPassivityOptions board = boardPassivityOptions(spec);
+    board.enabled = renderer.compare(base, std::string::npos, experiments::kObservedPassivitySuffix) != 0;
+    const PassivePolicy::Options options =
+        passivePolicyOptions(*policy, rest.data(), spec.descriptor.joints, spec.descriptor.actuators, board);
     return std::unique_ptr<DevicePolicy>(
         std::make_unique<PassivePolicy>(std::move(policy), options, FigureRecorder::none()));
   };

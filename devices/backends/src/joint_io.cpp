@@ -191,21 +191,17 @@ class ServoJointIo final : public JointIo {
 
 }  // namespace
 
-PassivityControllerOptions<Eigen::Dynamic> boardPassivityOptions(const BoardSpec& spec) {
-  PassivityControllerOptions<Eigen::Dynamic> options;
+ScenePortPassivityOptions boardPassivityOptions(const BoardSpec& spec) {
+  ScenePortPassivityOptions options;
   const int actuators = spec.descriptor.actuators;
   options.effort_limit.resize(actuators);
-  double resolved_rate = 0.0;
+  options.resolution.resize(actuators);
   for (int i = 0; i < actuators; ++i) {
     const auto k = static_cast<std::size_t>(i);
     const double limit = spec.descriptor.effort_limit[k];
     options.effort_limit(i) = limit > 0.0 ? limit : std::numeric_limits<double>::infinity();
-    if (spec.sample_rate_hz > 0.0) {
-      const double slowest = spec.position_resolution[k] * spec.sample_rate_hz / JointRateEstimator::kMaxWindow;
-      resolved_rate = std::max(resolved_rate, slowest);
-    }
+    options.resolution(i) = spec.position_resolution[k];
   }
-  if (resolved_rate > 0.0) options.min_rate = resolved_rate;
   return options;
 }
 

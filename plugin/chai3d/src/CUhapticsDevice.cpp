@@ -41,7 +41,6 @@ cUhapticsDevice::cUhapticsDevice(unsigned int a_deviceNumber, const uhaptics::De
       m_selection(a_selection),
       m_passivityMode(static_cast<int>(a_selection.option("passivity", 0.0, 0.0, 2.0))),
       m_passivityMaxDamping(a_selection.option("passivity_max_damping", std::nan(""), 0.0, 1e4)),
-      m_passivityMinRate(a_selection.option("passivity_min_rate", std::nan(""), 0.0, 1e3)),
       m_passivityEnergyThreshold(a_selection.option("passivity_energy_threshold", 0.0, 0.0, 10.0)),
       m_servoPeriod(a_servoPeriod),
       m_servoThreadRenders(a_selection.backend != "sim"),
@@ -129,41 +128,27 @@ void cUhapticsDevice::setPolicy(std::unique_ptr<uhaptics::DevicePolicy> a_policy
   m_policy->sense(uhaptics::SensedJoints{a_restJoints, rates.data(), true}, m_state);  // at rest until opened
 }
 
-std::vector<double> cUhapticsDevice::specificationDampingCapsLocked() {
-  const double angular = m_specifications.m_sensedRotation ? m_specifications.m_maxAngularDamping : 0.0;
-  std::vector<double> caps = uhaptics::passivityDampingCaps(*m_policy, m_restJoints.data(), m_joints, m_actuators,
-                                                            m_specifications.m_maxLinearDamping, angular);
+void cUhapticsDevice::configurePassivityLocked() {
+  uhaptics::ScenePortPassivityOptions board = uhaptics::boardPassivityOptions(m_io->spec());
+  board.enabled = m_passivityMode == 1;
+  board.energy_threshold = m_passivityEnergyThreshold;
+  board.max_damping = m_passivityMaxDamping;
+  uhaptics::PassivePolicy::Options options =
+      uhaptics::passivePolicyOptions(m_passive->wrapped(), m_restJoints.data(), m_joints, m_actuators, board);
   const std::array<double, C_MAX_DOF> rates{};
   m_policy->sense(uhaptics::SensedJoints{m_restJoints.data(), rates.data(), true}, m_state);
-  return caps;
-}
-
-void cUhapticsDevice::configurePassivityLocked() {
-  uhaptics::PassivePolicy::Options options;
-  options.actuators = m_actuators;
-  auto& controller = options.controller;
-  controller = uhaptics::boardPassivityOptions(m_io->spec());
-  controller.enabled = m_passivityMode == 1;
-  controller.energy_threshold = m_passivityEnergyThreshold;
-  if (!std::isnan(m_passivityMinRate)) controller.min_rate = m_passivityMinRate;
-  const std::vector<double> caps = std::isnan(m_passivityMaxDamping)
-                                       ? specificationDampingCapsLocked()
-                                       : std::vector<double>(static_cast<std::size_t>(m_actuators), m_passivityMaxDamping);
-  controller.max_damping_per_joint = Eigen::Map<const Eigen::VectorXd>(caps.data(), m_actuators);
   m_passive->configure(options);
 }
 
 std::vector<double> cUhapticsDevice::getPassivityDampingCaps() {
   std::lock_guard<std::mutex> lock(m_mutex);
-  if (m_passive == nullptr || m_passivityMode == 0) return {};
-  const auto& caps = m_passive->options().controller.max_damping_per_joint;
-  return std::vector<double>(caps.data(), caps.data() + caps.size());
-}
-
-double cUhapticsDevice::getPassivityMinRate() {
-  std::lock_guard<std::mutex> lock(m_mutex);
-  if (m_passive == nullptr || m_passive->options().controller.max_damping_per_joint.size() == 0) return 0.0;
-  return m_passive->options().controller.min_rate;
+  if (m_passive == nullptr || m_passivityMode == 0 || !m_io) return {};
+  const auto& controller = m_passive->controller();
+  std::vector<double> caps(static_cast<std::size_t>(m_actuators));
+  for (int i = 0; i < m_actuators; ++i)
+    caps[static_cast<std::size_t>(i)] =
+        controller.capAlong(uhaptics::ScenePortPassivity::Vector::Unit(m_actuators, i), m_servoPeriod);
+  return caps;
 }
 
 std::string cUhapticsDevice::paramsDirectory() {

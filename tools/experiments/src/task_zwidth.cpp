@@ -516,6 +516,50 @@ ReproductionTable taskZWidthReproduction(const std::vector<TaskZWidthDevice>& de
   return table;
 }
 
+bool TaskLayerCheck::pass() const noexcept {
+  return layered.outcome == WallOutcome::kPassive && layered.rendered_stiffness >= 0.8 * stiffness &&
+         observed.outcome != WallOutcome::kPassive;
+}
+
+std::vector<TaskLayerCheck> checkPassivityLayer(const std::vector<TaskZWidthDevice>& devices,
+                                                const std::vector<DeviceTaskZWidth>& results, double rate_hz,
+                                                const TaskScript& script) {
+  if (devices.size() != results.size()) throw Error("task Z-width: one result per device expected");
+  std::vector<TaskLayerCheck> checks;
+  for (std::size_t i = 0; i < devices.size(); ++i) {
+    const TaskZWidthDevice& device = devices[i];
+    const std::string layered = std::string("spring") + kPassivitySuffix;
+    if (std::find(device.renderers.begin(), device.renderers.end(), layered) == device.renderers.end()) continue;
+    for (const TaskBoundary& b : results[i].boundaries) {
+      if (b.renderer != "spring" || b.rate_hz != rate_hz || !std::isfinite(b.k_max)) continue;
+      TaskLayerCheck c;
+      c.device = device.name;
+      c.rate_hz = rate_hz;
+      c.delay = b.delay;
+      c.k_without = b.k_max;
+      c.stiffness = 2.0 * b.k_max;
+      c.layered = runTaskWall(device, layered, rate_hz, b.delay, c.stiffness, script);
+      c.observed = runTaskWall(device, std::string("spring") + kObservedPassivitySuffix, rate_hz, b.delay, c.stiffness,
+                               script);
+      checks.push_back(c);
+    }
+  }
+  return checks;
+}
+
+ReproductionTable passivityLayerReproduction(const std::vector<TaskLayerCheck>& checks) {
+  ReproductionTable table;
+  char quantity[200];
+  for (const TaskLayerCheck& c : checks) {
+    std::snprintf(quantity, sizeof quantity,
+                  "%s at the tool, %g kHz, delay %d: spring wall at 2 K_max with passivity=1, rendered / K", c.device.c_str(),
+                  c.rate_hz / 1000.0, c.delay);
+    table.add({kStabilityRows, quantity, 1.0, c.layered.rendered_stiffness / c.stiffness,
+               "passive and >= 0.8; with passivity=2 not passive", c.pass(), ""});
+  }
+  return table;
+}
+
 TaskZWidthDevice pointMassTaskDevice(double mass, double damping) {
   if (!(mass > 0.0) || !(damping > 0.0) || !std::isfinite(mass) || !std::isfinite(damping))
     throw Error("pointMassTaskDevice: mass and damping must be finite and > 0");

@@ -73,6 +73,7 @@ void TauPolicy::reset(int command_delay) {
   classifier_.setSpringLimit(rated_spring_[command_delay > 0 ? 1 : 0]);
   lqr_engaged_ = false;
   tau_.setZero();
+  own_.setZero();
 }
 
 void TauPolicy::sense(const SensedJoints& reading, SensedState& state) noexcept {
@@ -103,6 +104,7 @@ void TauPolicy::checkFirstReading() const {
 
 void TauPolicy::readingLost() noexcept {
   tau_.setZero();
+  own_.setZero();
   for (Vec6& sent : sent_) sent.setZero();  // the device is held at zero meanwhile
   lqr_engaged_ = false;
   classifier_.holdLost();
@@ -114,6 +116,7 @@ void TauPolicy::commandApplied(int periods_ago) noexcept {
 
 void TauPolicy::endSession() noexcept {
   tau_.setZero();
+  own_.setZero();
   lqr_engaged_ = false;
   classifier_.endContact();  // no release counted: the session ends
   explicit_.active = false;
@@ -161,6 +164,19 @@ void TauPolicy::recordFigures(const TauContactClassifier::Events& events, const 
   }
 }
 
+void TauPolicy::ownEfforts(double* efforts) const noexcept { Eigen::Map<Vec6>(efforts) += own_; }
+
+bool TauPolicy::actuatedInertia(double* inertia) const {
+  TauData data(*model_);
+  data.pose = data_->pose;
+  if (model_->forward(q_, data) != Fault::kNone || model_->computeDynamicsTerms(q_, Vec6::Zero(), data) != Fault::kNone ||
+      !data.M.allFinite())
+    return false;
+  Eigen::Map<Mat6> out(inertia);
+  out = data.M;
+  return true;
+}
+
 Fault TauPolicy::render(const SceneInput& input, double* efforts) noexcept {
   // input.dt is the model's servo period (the classifier is built for it).
   const Vec3 reported = input.seen_position + centre_;  // model frame
@@ -182,7 +198,7 @@ Fault TauPolicy::render(const SceneInput& input, double* efforts) noexcept {
     applied_age_ = -1;
     const WallCommand& wall = lqr_->tick(q_, surface, *data_, applied);
     fault = wall.fault;
-    tau_ = wall.torque;
+    tau_ = own_ = wall.torque;
     classifier_.wallTicked(wall);
     const TauContactClassifier::Events& events = classifier_.events();
     lqr_engaged_ = explicit_surface_ ? events.held : classifier_.state() == TauContactClassifier::State::kLqr;
@@ -204,6 +220,7 @@ Fault TauPolicy::render(const SceneInput& input, double* efforts) noexcept {
   }
   if (fault != Fault::kNone || !tau_.allFinite()) {
     tau_.setZero();
+    own_.setZero();
     classifier_.holdLost();
     if (fault == Fault::kNone) fault = Fault::kNonFiniteResult;
   }

@@ -27,7 +27,7 @@
 #include "uhaptics/backends/board_emulator.hpp"
 #include "uhaptics/backends/referee.hpp"
 #include "uhaptics/backends/servo_loop.hpp"
-#include "uhaptics/core/passivity_controller.hpp"
+#include "uhaptics/core/scene_port_passivity.hpp"
 
 namespace uhaptics {
 
@@ -167,14 +167,11 @@ class JointRateEstimator {
   bool have_previous_ = false;
 };
 
-/// The passivity controller's options (passivity_controller.hpp) as the board states them: each
-/// actuated joint's effort limit from the descriptor (infinity where it states none), and the
-/// velocity guard at the slowest rate JointRateEstimator resolves at the board's sampling, one sensor
-/// step over its longest window, the largest over the actuated joints (ideal sensors: the options'
-/// default). The damping caps (passivityDampingCaps, from max_linear_damping and
-/// max_angular_damping) and the energy threshold are the caller's. Set-up: allocates nothing beyond
-/// the options.
-PassivityControllerOptions<Eigen::Dynamic> boardPassivityOptions(const BoardSpec& spec);
+/// The passivity layer's options (scene_port_passivity.hpp) as the board states them: each actuated
+/// joint's effort limit from the descriptor (infinity where it states none) and its sensor step
+/// (the dead band of the displacement it brakes on). The inertia (passivePolicyOptions) is the
+/// policy's. Set-up.
+ScenePortPassivityOptions boardPassivityOptions(const BoardSpec& spec);
 
 /// The "sim" joint I/O over a plant the caller makes (on open(), again after each close()): a device
 /// class whose simulation needs a user or options of its own, or a test fixture. spec describes

@@ -53,13 +53,13 @@
 // statistics' "referee" object (docs/chai3d.md, "The referee"). 0 leaves the plant unobserved.
 //
 // Passivity layer (option "passivity", default 0: off): 1 wraps the device's policy in
-// uhaptics::PassivePolicy (passive_policy.hpp), the time-domain passivity observer and controller
-// on the actuated joints, in the same servo tick; 2 observes only (the energy figures, no
-// damping). Off, the policy runs unwrapped and the tick does none of its work. Read here for every
-// device; open() sets it up from the board it opened: the effort limits of its descriptor, the
-// velocity guard from its sensors' resolution, and the damping cap (option
-// "passivity_max_damping", else the specification's m_maxLinearDamping and m_maxAngularDamping
-// seen at each actuated joint: see getPassivityDampingCaps()).
+// uhaptics::PassivePolicy (passive_policy.hpp), which observes the share of the command that
+// renders the scene against the scene's continuous-time work and damps what the sampling and the
+// command delay generate, in the same servo tick; 2 observes only (the energy figures, no damping).
+// Off, the policy runs unwrapped and the tick does none of its work. Read here for every device;
+// open() sets it up from the board it opened: the effort limits and sensor steps of its descriptor,
+// the command delay, and the damping cap from the policy's joint-space inertia (option
+// "passivity_max_damping" caps it further: see getPassivityDampingCaps()).
 //
 // Subclasses supply only what is CHAI3D's or the simulation's: their specification and their policy
 // (in the constructor, setPolicy()), their simulated plant, and accessors for their policy's state.
@@ -201,23 +201,16 @@ class cUhapticsDevice : public cGenericHapticDevice {
   /// The passivity layer: 0 off (default), 1 on (observer and damping), 2 observe only (option
   /// "passivity"; see the header comment).
   int getPassivityMode() const { return m_passivityMode; }
-  /// Per actuated joint, the largest damping the passivity layer may add [N m s/rad, or N s/m on a
-  /// prismatic joint], as set up by the last open(); empty while the layer is off or before open().
-  /// The option "passivity_max_damping" (0..1e4) gives one cap for every joint; without it, joint
-  /// i's cap is b_lin |dp/dq_i|^2 + b_ang |dtheta/dq_i|^2 at the rest joints: the damping of the
-  /// specification's m_maxLinearDamping b_lin (and m_maxAngularDamping b_ang on a device that senses
-  /// its orientation) at the tool, seen at the joint, from the policy's own kinematics.
+  /// Per actuated joint, the largest damping the passivity layer may add along that joint's axis
+  /// [N m s/rad, or N s/m on a prismatic joint], as set up by the last open(): m_i / (2 T (1 + d)),
+  /// m_i = 1 / (M^-1)_ii the inertia a torque on joint i meets (M the policy's joint-space inertia at
+  /// rest), T the servo period and d the board's command delay; at most the option
+  /// "passivity_max_damping" (0..1e4). Empty while the layer is off or before open(). (Along the
+  /// scene's effort e in joint space the cap is 1 / (e^T M^-1 e 2 T (1 + d)).)
   std::vector<double> getPassivityDampingCaps();
-  /// The velocity guard of the passivity layer [rad/s or m/s], as set up by the last open(): the
-  /// option "passivity_min_rate" (0..1e3), else one sensor resolution over the rate estimator's
-  /// longest window (the slowest rate it resolves), the largest over the actuated joints, else
-  /// 1e-3 for ideal sensors. 0 while the layer is off or before open().
-  double getPassivityMinRate();
-  /// Net generated energy the passivity layer tolerates before it damps [J] (option
-  /// "passivity_energy_threshold", 0..10, default 0). A policy whose efforts include a conservative
-  /// field of its own (the TAU's gravity compensation, the planar devices' null-space potential)
-  /// gives out energy as the user moves it, which the layer counts like any other; a threshold above
-  /// that field's energy range leaves it alone, at the price of tolerating as much from the scene.
+  /// Generated energy the passivity layer tolerates before it damps [J] (option
+  /// "passivity_energy_threshold", 0..10, default 0): energy the scene's port gave out beyond the
+  /// scene's own continuous-time work.
   double getPassivityEnergyThreshold() const { return m_passivityEnergyThreshold; }
 
  protected:
@@ -281,11 +274,9 @@ class cUhapticsDevice : public cGenericHapticDevice {
   void tickLocked() noexcept;
   /// Reads the joints and passes them to sense(); false (nothing sensed) when there is no reading.
   bool readJointsLocked(bool a_first) noexcept;
-  /// open(), before the policy's reset(): the passivity layer's limits, guard and caps for the
-  /// board m_io opened.
+  /// open(), before the policy's reset(): the passivity layer's limits, sensor steps and inertia for
+  /// the board m_io opened.
   void configurePassivityLocked();
-  /// The default damping caps (see getPassivityDampingCaps()), one per actuator.
-  std::vector<double> specificationDampingCapsLocked();
   /// sense() on positions from the sensors (rates by the estimator).
   void senseLocked(const double* a_positions, std::uint32_t a_sampleUs, bool a_first) noexcept;
   /// render() with the checks every backend applies: a fault or a non-finite effort sends zero.
@@ -323,8 +314,7 @@ class cUhapticsDevice : public cGenericHapticDevice {
   std::unique_ptr<uhaptics::DevicePolicy> m_policy;  // setPolicy(); the passivity layer when on
   uhaptics::PassivePolicy* m_passive = nullptr;       // the layer in m_policy, nullptr when off
   const int m_passivityMode;                           // option "passivity"
-  const double m_passivityMaxDamping;                  // option "passivity_max_damping", NaN: from the spec
-  const double m_passivityMinRate;                     // option "passivity_min_rate", NaN: from the sensors
+  const double m_passivityMaxDamping;                  // option "passivity_max_damping", NaN: the inertia's cap alone
   const double m_passivityEnergyThreshold;             // option "passivity_energy_threshold" [J]
   std::array<double, C_MAX_DOF> m_restJoints{};        // setPolicy()
   State m_state;       // the policy's latest sense()

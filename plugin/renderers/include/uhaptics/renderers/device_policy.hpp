@@ -109,6 +109,20 @@ class DevicePolicy {
   /// (0: the last render()'s efforts). Ignored by policies whose design assumes a fixed delay.
   virtual void commandApplied(int periods_ago) noexcept { (void)periods_ago; }
 
+  /// Servo tick, after render(): adds to `efforts` (one per actuator, zeroed by the caller) the share
+  /// of render()'s efforts that is the policy's own field rather than the scene's force: gravity
+  /// compensation, null-space control, a position controller's regulator around its surface. The
+  /// rest renders the scene, and the passivity layer observes that share alone (PassivePolicy). By
+  /// default none: every effort renders the scene.
+  virtual void ownEfforts(double* efforts) const noexcept { (void)efforts; }
+  /// Set-up: the joint-space inertia of the actuated joints at the last sensed configuration [kg m^2,
+  /// kg on a prismatic joint], column-major, actuators x actuators, into `inertia`; false (nothing
+  /// written) when the policy's model states no dynamics. Sizes the passivity layer's damping cap.
+  virtual bool actuatedInertia(double* inertia) const {
+    (void)inertia;
+    return false;
+  }
+
   /// The scene's device-frame force in the model's task frame (where a simulated user pushes the
   /// model's plant); unchanged by default.
   virtual Vec3 deviceToModelForce(const Vec3& force) const noexcept { return force; }

@@ -1,64 +1,63 @@
 #pragma once
 // uhaptics::PassivePolicy: the passivity layer in the servo path. It wraps any device's rendering
-// policy (device_policy.hpp) and runs the time-domain passivity observer and controller
-// (PassivityController, Hannaford and Ryu 2002) on the device's actuated joints, so the device never
-// gives out more energy than it has taken in, whatever the wrapped renderer asks for.
+// policy (device_policy.hpp) and runs the scene-port observer and controller (ScenePortPassivity,
+// scene_port_passivity.hpp) on the device's actuated joints, so the share of the command that
+// renders the scene never gives the user more energy than the scene itself would in continuous
+// time, whatever the sampling and the command delay make of it.
 //
 // One servo period:
 //
-//   sense(reading)  the wrapped policy's sense(); the actuated joints' positions and rates of the
-//                   same reading are kept for the controller
-//   render(input)   the wrapped policy's efforts u; the controller closes the last period with the
-//                   work of the command actually applied, and where the device has given out more
-//                   than it has taken in it adds -alpha qd (alpha capped per joint, nothing below the
-//                   velocity guard); the command is held to the effort limits and finite
+//   sense(reading)  the wrapped policy's sense(); the actuated joints' positions are kept
+//   render(input)   the wrapped policy's efforts e and their scene share s = e - ownEfforts();
+//                   the layer closes the last period with the port effort the board applied over it
+//                   (sent command_delay periods earlier, as reset() was told), books its work
+//                   against the scene's trapezoidal work, and where the port generated energy it
+//                   brakes along s on the last period's displacement; the command is held to the
+//                   effort limits and finite
 //
-// Joint space, so that every device is covered: an underactuated device's sensed-only joints carry
-// no effort and do no work, and a redundant device's null-space motion is work like any other.
-// Joint convention: actuator i drives sensed joint i, the sensed-only joints following the actuated
-// ones (the wire protocol's order, and every uhaptics device's).
+// The policy's own fields (gravity compensation, null-space control, the LQR wall's regulator)
+// are neither observed nor damped: with no scene force the layer adds nothing. Joint convention:
+// actuator i drives sensed joint i, the sensed-only joints following the actuated ones.
 //
-// Periods this layer did not command are left out of the observation (the work across them is not
-// counted; what was counted stays): a period without a reading (readingLost()), a reading that got
-// no render() (the caller's stale-input ramp), a new session (reset(), a first reading). A period
-// whose wrapped render() faults is commanded zero by the caller: the observer counts a zero command
-// and the fault is passed on.
+// Periods this layer did not command are left out of the observation (the chain starts again and
+// the excess is forgotten; the totals stay): a period without a reading (readingLost()), a reading
+// that got no render() (the caller's stale-input ramp), a new session (reset(), a first reading). A
+// period whose wrapped render() faults is commanded zero and ends the chain the same way.
 //
 // Figures (FigureRecorder; energies in mJ, damping in N m s/rad, or N s/m on a prismatic joint):
-//   passivity_energy_out_mJ       net energy the applied commands have given the user (value; it
-//                                 falls when the user does work on the device)
-//   passivity_peak_energy_out_mJ  its largest value: the observer's worst report of net generated
-//                                 energy
-//   passivity_dissipated_mJ       energy the added damping has absorbed (value)
+//   passivity_energy_out_mJ       net work the scene's port (its share plus the layer's damping, as
+//                                 applied) did on the user (value; it falls when the user presses in)
+//   passivity_generated_mJ        energy the port generated against the continuous-time scene (value)
+//   passivity_peak_excess_mJ      the most generated energy that waited for dissipation (maximum)
+//   passivity_dissipated_mJ       work the layer's damping took from the user (value)
 //   passivity_active_ticks        periods in which damping was added
-//   passivity_max_damping         largest damping added to one joint
-//   passivity_faults              periods the controller refused (non-finite reading or efforts,
-//                                 bad period) and commanded zero
+//   passivity_max_damping         largest damping added along the scene's effort
+//   passivity_faults              periods the layer refused (non-finite reading or efforts, bad
+//                                 period) and commanded zero
 //
 // Threading and cost as DevicePolicy: sense(), render(), readingLost() and endSession() never
 // allocate, throw or block; construction, configure() and reset() are set-up.
 #include <cstdint>
+#include <limits>
 #include <memory>
 #include <string>
 #include <vector>
 
-#include "uhaptics/core/passivity_controller.hpp"
+#include "uhaptics/core/scene_port_passivity.hpp"
 #include "uhaptics/renderers/device_policy.hpp"
 
 namespace uhaptics {
 
 class PassivePolicy final : public DevicePolicy {
  public:
-  using Controller = PassivityController<Eigen::Dynamic>;
+  using Controller = ScenePortPassivity;
 
   struct Options {
     /// Actuated joints: the first `actuators` sensed joints, 1..kMaxSensedJoints.
     int actuators = 1;
-    /// The controller per actuated joint: enabled = false observes only (efforts pass bit for bit);
-    /// max_damping / max_damping_per_joint cap the damping [N m s/rad or N s/m]; effort_limit holds
-    /// the command [N m or N]; min_rate is the velocity guard [rad/s or m/s]. Sizes 0 or
-    /// `actuators` (passivity_controller.hpp).
-    PassivityControllerOptions<Eigen::Dynamic> controller;
+    /// The observer and controller on the actuated joints (scene_port_passivity.hpp): enabled =
+    /// false observes only (efforts pass bit for bit). Its command_delay is overridden by reset()'s.
+    ScenePortPassivityOptions controller;
   };
 
   /// Takes over `wrapped` and declares this layer's figures on `figures` (which must outlive it).
@@ -66,18 +65,23 @@ class PassivePolicy final : public DevicePolicy {
   /// controller option is out of range, or the recorder refuses a figure (full, or a name taken).
   PassivePolicy(std::unique_ptr<DevicePolicy> wrapped, const Options& options, FigureRecorder& figures);
 
-  /// Set-up, between sessions: new options (e.g. the effort limits and guard of the board just
+  /// Set-up, between sessions: new options (e.g. the effort limits and inertia of the board just
   /// opened); the observation starts again. Throws uhaptics::Error as the constructor.
   void configure(const Options& options);
 
   /// The wrapped policy's name, followed by " + passivity".
   std::string name() const override;
+  /// Also aligns the layer's booking with command_delay (0..kScenePortMaxDelay; throws beyond).
   void reset(int command_delay) override;
   void sense(const SensedJoints& reading, SensedState& state) noexcept override;
   void checkFirstReading() const override { wrapped_->checkFirstReading(); }
   Fault render(const SceneInput& input, double* efforts) noexcept override;
   void readingLost() noexcept override;
   void endSession() noexcept override;
+  void commandApplied(int periods_ago) noexcept override { wrapped_->commandApplied(periods_ago); }
+  /// The wrapped policy's own fields: the layer's damping is the scene port's.
+  void ownEfforts(double* efforts) const noexcept override { wrapped_->ownEfforts(efforts); }
+  bool actuatedInertia(double* inertia) const override { return wrapped_->actuatedInertia(inertia); }
   Vec3 deviceToModelForce(const Vec3& force) const noexcept override { return wrapped_->deviceToModelForce(force); }
   Vec3 sceneForceAtUserPort(const Vec3& force) const noexcept override { return wrapped_->sceneForceAtUserPort(force); }
   Vec3 modelToDevicePoint(const Vec3& point) const noexcept override { return wrapped_->modelToDevicePoint(point); }
@@ -86,7 +90,7 @@ class PassivePolicy final : public DevicePolicy {
   DevicePolicy& wrapped() noexcept { return *wrapped_; }
   const DevicePolicy& wrapped() const noexcept { return *wrapped_; }
   const Options& options() const noexcept { return options_; }
-  /// The observer and controller: energy out, peak, dissipated, active ticks, faults, last damping.
+  /// The observer and controller: booked work, generated energy, excess, dissipated, ticks, faults.
   const Controller& controller() const noexcept { return controller_; }
 
  private:
@@ -97,21 +101,19 @@ class PassivePolicy final : public DevicePolicy {
   Options options_;
   Controller controller_;
   FigureRecorder& figures_;
-  Controller::Vector q_, rates_, efforts_, command_;  // the actuated joints' reading and efforts
+  Controller::Vector q_, efforts_, scene_, command_;  // the actuated joints' reading, efforts, scene share
   bool sensed_ = false;  // a reading is waiting for its render()
-  int fig_energy_ = 0, fig_peak_ = 0, fig_dissipated_ = 0, fig_active_ = 0, fig_max_damping_ = 0, fig_faults_ = 0;
+  int fig_energy_ = 0, fig_generated_ = 0, fig_peak_excess_ = 0, fig_dissipated_ = 0, fig_active_ = 0,
+      fig_max_damping_ = 0, fig_faults_ = 0;
 };
 
-/// Per actuated joint, the damping cap [N m s/rad or N s/m] under which the joint's added damping
-/// puts at most linear_damping [N s/m] on the tool's motion and angular_damping [N m s/rad] on its
-/// rotation: b_i = b_lin |dp/dq_i|^2 + b_ang |dtheta/dq_i|^2, the tool's sensitivities from central
-/// differences of policy.sense() about rest_joints (its kinematics, whatever the device). A device's
-/// specification states its damping at the tool (BoardSpec::max_linear_damping, CHAI3D's
-/// m_maxLinearDamping); this turns it into the caps PassivityControllerOptions::max_damping_per_joint
-/// takes. Non-positive or non-finite damping counts as 0. Leaves the policy sensing rest_joints, at
-/// rest. Set-up: allocates; throws Error for joints outside 1..kMaxSensedJoints or actuators outside
-/// 1..joints.
-std::vector<double> passivityDampingCaps(DevicePolicy& policy, const double* rest_joints, int joints, int actuators,
-                                         double linear_damping, double angular_damping);
+/// The layer's options for a device's policy: `board` (the effort limits and sensor steps of the
+/// board it runs on, boardPassivityOptions) with the joint-space inertia of the actuated joints from
+/// policy.actuatedInertia() at rest_joints (a policy without dynamics: none, and the layer observes
+/// only unless board.max_damping is set). The one set-up the CHAI3D adapter and the harnesses share.
+/// Leaves the policy sensing rest_joints, at rest. Set-up: allocates; throws Error for joints outside
+/// 1..kMaxSensedJoints or actuators outside 1..joints.
+PassivePolicy::Options passivePolicyOptions(DevicePolicy& policy, const double* rest_joints, int joints, int actuators,
+                                            const ScenePortPassivityOptions& board);
 
 }  // namespace uhaptics

@@ -60,6 +60,18 @@ class PlanarFmePolicy final : public DevicePolicy {
   void reset(int command_delay) override;
   void sense(const SensedJoints& reading, SensedState& state) noexcept override;
   Fault render(const SceneInput& input, double* efforts) noexcept override;
+  /// The null-space torque (the FME and joint-limit control); the primary task J^T (alpha F) is the scene's.
+  void ownEfforts(double* efforts) const noexcept override {
+    Eigen::Map<typename Model::JointVector>(efforts) += controller_->status().tau_null;
+  }
+  bool actuatedInertia(double* inertia) const override {
+    typename Model::MassMatrix M;
+    model_->massMatrix(q_, M);
+    if (!M.allFinite()) return false;
+    Eigen::Map<typename Model::MassMatrix> out(inertia);
+    out = M;
+    return true;
+  }
   Vec3 deviceToModelForce(const Vec3& force) const noexcept override { return planarForce(force); }
   Vec3 modelToDevicePoint(const Vec3& point) const noexcept override {
     return planarToDevice(point.template head<2>() - centre_);

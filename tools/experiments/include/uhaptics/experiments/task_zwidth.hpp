@@ -49,8 +49,10 @@
 
 namespace uhaptics::experiments {
 
-/// A renderer's name with this suffix is that renderer under the passivity layer (PassivePolicy).
+/// A renderer's name with this suffix is that renderer under the passivity layer (PassivePolicy)...
 inline constexpr const char* kPassivitySuffix = "+passivity";
+/// ...and with this one under the layer observing only (the CHAI3D option passivity=2).
+inline constexpr const char* kObservedPassivitySuffix = "+passivity-observe";
 
 /// One device as the task harness drives it.
 struct TaskZWidthDevice {
@@ -202,6 +204,31 @@ std::vector<DeviceTaskZWidth> sweepTaskZWidth(const std::vector<TaskZWidthDevice
 /// devices and results in the same order (sweepTaskZWidth's).
 ReproductionTable taskZWidthReproduction(const std::vector<TaskZWidthDevice>& devices,
                                          const std::vector<DeviceTaskZWidth>& results);
+
+/// The passivity layer's check at the tool: the device's spring at twice the K_max it has without
+/// the layer (at that rate and delay), run with the layer on and with it observing only.
+struct TaskLayerCheck {
+  std::string device;
+  double rate_hz = 1000.0;
+  int delay = 0;
+  double k_without = 0.0;  // the spring's K_max without the layer [N/m]
+  double stiffness = 0.0;  // 2 k_without
+  TaskWallRun layered;     // spring + kPassivitySuffix
+  TaskWallRun observed;    // spring + kObservedPassivitySuffix
+  /// Passive with the layer, rendering at least 0.8 of K (a layer that only scales the force down
+  /// does not pass), and not passive observing only.
+  bool pass() const noexcept;
+};
+
+/// For every device that renders spring + kPassivitySuffix and whose spring has a K_max at rate_hz in
+/// results (the sweep's), at each delay found there: the check above.
+std::vector<TaskLayerCheck> checkPassivityLayer(const std::vector<TaskZWidthDevice>& devices,
+                                                const std::vector<DeviceTaskZWidth>& results, double rate_hz = 1000.0,
+                                                const TaskScript& script = {});
+
+/// The checks as reproduction rows (paper column kStabilityRows), one per device and delay: the
+/// rendered stiffness over K, passing as TaskLayerCheck::pass().
+ReproductionTable passivityLayerReproduction(const std::vector<TaskLayerCheck>& checks);
 
 /// A 1-DoF point mass with viscous damping along device z (m x'' + b x' = F_user + F_actuator,
 /// its "policy" J^T F = F), ideal sensor: the closed-form check, K_max = 2 b / T.

@@ -100,6 +100,10 @@ class TauPolicy final : public DevicePolicy {
   /// The board's STATE names the command it applied (last_command_sequence): the wall's observer is
   /// told that command's torque for the next render() instead of the one reset()'s delay implies.
   void commandApplied(int periods_ago) noexcept override;
+  /// The wall's own torque: gravity compensation, and while the LQR wall holds the tool its
+  /// regulator around the plane; the rest (the spring's J^T F, the force across a held wall) is the scene's.
+  void ownEfforts(double* efforts) const noexcept override;
+  bool actuatedInertia(double* inertia) const override;
   Vec3 modelToDevicePoint(const Vec3& point) const noexcept override { return point - centre_; }
 
   const TauModel& model() const noexcept { return *model_; }
@@ -146,6 +150,7 @@ class TauPolicy final : public DevicePolicy {
   int fig_engagements_, fig_releases_, fig_held_ticks_, fig_entry_depth_, fig_max_penetration_,
       fig_saturated_ticks_, fig_spring_ticks_, fig_soft_contacts_, fig_soft_stiffness_, fig_overloads_;
   Vec6 tau_ = Vec6::Zero();
+  Vec6 own_ = Vec6::Zero();  // tau_'s share that is the wall's own (ownEfforts())
   WallDesign design_;
   bool design_changed_ = false;  // setWallDesign() since lqr_ was made
   int wall_delay_ = 0;  // the command delay [periods] lqr_ is designed for
