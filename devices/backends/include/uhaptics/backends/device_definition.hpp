@@ -44,10 +44,10 @@ struct BoardSpec {
   /// (docs/stability.md). NaN where the file rates none (the exoskeleton's user is position-driven).
   RatedStiffness rated_stiffness = kUnrated;
   RatedStiffness rated_stiffness_delayed = kUnrated;
-  /// The largest damping a renderer may add at the tool [N s/m] and about it [N m s/rad] (CHAI3D's
-  /// m_maxLinearDamping and m_maxAngularDamping): the passivity layer's caps, mapped to the joints by
-  /// passivityDampingCaps (passive_policy.hpp). The parameter file's "stability" section; 0 where it
-  /// states none (the layer then observes without damping).
+  /// The largest damping a scene should render at the tool [N s/m] and about it [N m s/rad]: the
+  /// specification CHAI3D reports (m_maxLinearDamping, m_maxAngularDamping). The parameter file's
+  /// "stability" section; 0 where it states none. (The passivity layer's cap comes from the policy's
+  /// inertia, not from these: passive_policy.hpp.)
   double max_linear_damping = 0.0;
   double max_angular_damping = 0.0;
 };

@@ -238,7 +238,7 @@ class cUhapticsDevice : public cGenericHapticDevice {
   void setCommonSpecifications(const std::string& a_modelName, bool a_orientation);
   /// m_maxLinearDamping (and m_maxAngularDamping when the orientation is sensed) as the device's
   /// parameter file states them (BoardSpec::max_linear_damping, its "stability" section): the
-  /// passivity layer's caps at the tool. After setCommonSpecifications().
+  /// damping scenes should render at the tool. After setCommonSpecifications().
   void setSpecifiedDamping();
   /// Folder of the device parameter files: uhaptics::defaultParamsDirectory() (params_location.hpp).
   static std::string paramsDirectory();
