@@ -27,13 +27,17 @@
 //                                                  absorbed energy is forgotten at once, everything
 //                                                  at a release
 //   e        = s_k / |s_k|, w = e . dq_db / T      the rate along the scene's effort, from the last
-//                                                  period's displacement with a dead band of one sensor
-//                                                  step per joint (no estimator lag)
+//                                                  period's displacement with a dead band of half a
+//                                                  sensor step per joint (no estimator lag)
 //   alpha    = min((excess - pending) / (T w^2), cap),  cap = m_e / (2 T (1 + d)), m_e = 1 / (e^T M^-1 e)
 //   u_k      = clamp(e_k - alpha w e, limits)
 //
 // where pending is what the brakes already sent but not yet applied will dissipate at the current
-// rate. Why these choices:
+// rate, and the cap is scaled by the brakes' record: while the brakes applied over the last ten or so
+// periods have pushed with the motion more than against it (a displacement of one encoder count that
+// turns back next period looks like motion and is not), the cap shrinks by 10 % a period, and it
+// grows back while they dissipate. Within the limits the brake is shortened as a whole, so it stays
+// along e. Why these choices:
 // - Reference energy following (Ryu, Preusche, Hannaford and Hirzinger 2005) with the scene's
 //   stored energy estimated from its own effort along the path, so no scene needs to state it: for
 //   a sampled spring the increment is K |dq|^2 / 2 per period, the work Colgate and Brown's K T / 2
@@ -161,6 +165,12 @@ class ScenePortPassivity {
       const double generated = overdrawn + (booked ? work - reference : 0.0);
       if (!std::isfinite(generated) || !std::isfinite(absorbed)) return fail(Fault::kNonFiniteResult, u_out);
       stored_ = stored + overdrawn;
+      // The brakes' record over the last periods: while they have pushed with the motion more than
+      // against it, the cap shrinks; while they dissipate, it grows back.
+      if (absorbed != 0.0) {
+        record_ = kRecordDecay * record_ + absorbed;
+        efficacy_ = record_ < 0.0 ? kEfficacyCut * efficacy_ : std::min(1.0, efficacy_ + kEfficacyRecovery);
+      }
       booked_ += work;
       dissipated_ += absorbed;
       generated_ += generated;
@@ -185,7 +195,7 @@ class ScenePortPassivity {
       for (int j = 0; j < d; ++j) pending -= brakes_[static_cast<std::size_t>(j)].dot(rate_) * period;
       const double to_dissipate = excess - std::max(0.0, pending);
       const double capacity = period * w * w;  // energy one unit of damping takes out over a period
-      const double cap = capAlong(direction_, period);
+      const double cap = efficacy_ * capAlong(direction_, period);
       if (to_dissipate > 0.0 && capacity > 0.0 && cap > 0.0) {
         damping_ = to_dissipate > cap * capacity ? cap : to_dissipate / capacity;
         brake_ = (-damping_ * w) * direction_;
@@ -196,9 +206,22 @@ class ScenePortPassivity {
     if (!options_.enabled) {
       u_out = efforts;
     } else {
-      u_out = efforts + brake_;
-      if (options_.effort_limit.size() != 0) u_out = u_out.cwiseMax(-options_.effort_limit).cwiseMin(options_.effort_limit);
-      brake_ = u_out - efforts.cwiseMax(-limitOrInf()).cwiseMin(limitOrInf());  // the brake that survived the limits
+      u_out = efforts;
+      if (options_.effort_limit.size() != 0) {
+        // The limits shorten the brake as a whole: clipped joint by joint it would turn away from
+        // the scene's direction, and a damper turned off the rate it acts against can push.
+        const Vector& limit = options_.effort_limit;
+        u_out = u_out.cwiseMax(-limit).cwiseMin(limit);
+        double share = 1.0;
+        for (Eigen::Index i = 0; i < dim_; ++i) {
+          const double room = brake_(i) > 0.0 ? limit(i) - u_out(i) : limit(i) + u_out(i);
+          if (brake_(i) != 0.0 && room < share * std::abs(brake_(i))) share = std::max(0.0, room / std::abs(brake_(i)));
+        }
+        brake_ *= share;
+        u_out = (u_out + brake_).cwiseMax(-limit).cwiseMin(limit);
+      } else {
+        u_out += brake_;
+      }
     }
     if (!u_out.allFinite()) return fail(Fault::kNonFiniteResult, u_out);
     for (int j = kScenePortMaxDelay; j > 0; --j) {
@@ -231,6 +254,8 @@ class ScenePortPassivity {
     excess_ = stored_ = 0.0;
     damping_ = 0.0;
     brake_.setZero();
+    record_ = 0.0;
+    efficacy_ = 1.0;
   }
   /// A new session: totals and counters too.
   void reset() noexcept {
@@ -259,10 +284,6 @@ class ScenePortPassivity {
   double lastDamping() const noexcept { return damping_; }
 
  private:
-  Vector limitOrInf() const noexcept {
-    return options_.effort_limit.size() != 0 ? options_.effort_limit
-                                             : Vector::Constant(dim_, std::numeric_limits<double>::infinity());
-  }
   Fault fail(Fault fault, Vector& u_out) noexcept {
     u_out = Vector::Zero(dim_);
     interrupt();
@@ -273,6 +294,14 @@ class ScenePortPassivity {
   Options options_;
   Eigen::Index dim_;
   Vector dead_band_, last_q_, last_scene_, brake_, dq_, direction_, rate_;
+  // The record's memory is about 10 braking periods; per period of an active record the cap is cut
+  // by 10 %, per period of a dissipating one it regains a tenth of the full cap. A deeper cut also
+  // throttles the brakes a real ring needs near its turning points (the RHI's delayed wall).
+  static constexpr double kRecordDecay = 0.9;
+  static constexpr double kEfficacyCut = 0.9;
+  static constexpr double kEfficacyRecovery = 0.1;
+  double record_ = 0.0;    // the brakes' recent work taken from the user [J]
+  double efficacy_ = 1.0;  // share of the cap the brake's record allows, (0, 1]
   Matrix mobility_;  // the inertia's inverse (empty without one)
   std::array<Vector, kScenePortMaxDelay + 1> port_, brakes_;  // sent commands' port share and brake, newest first
   int sent_ = 0;  // commands sent in this chain (up to kScenePortMaxDelay + 1)
