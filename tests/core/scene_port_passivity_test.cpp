@@ -185,6 +185,10 @@ TEST_CASE("scene port passivity: bad options and input are refused with a zero c
   o.command_delay = 0;
   o.inertia = ScenePortPassivity::Matrix::Identity(2, 2) * -1.0;  // not positive definite
   CHECK_THROWS_AS(ScenePortPassivity(o, 2), Error);
+  o.inertia(0, 1) = 0.5;  // not symmetric
+  CHECK_THROWS_AS(ScenePortPassivity(o, 2), Error);
+  o.inertia = ScenePortPassivity::Matrix::Identity(3, 3);  // not dim x dim
+  CHECK_THROWS_AS(ScenePortPassivity(o, 2), Error);
   o.inertia.resize(0, 0);
   o.resolution = vec({1e-3});  // one entry for two joints
   CHECK_THROWS_AS(ScenePortPassivity(o, 2), Error);

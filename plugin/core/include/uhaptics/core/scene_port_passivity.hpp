@@ -23,21 +23,21 @@
 //                                                  add, and what the scene itself gives beyond its store;
 //                                                  a press stores nothing here, so a ring shows from its
 //                                                  first cycle
-//   excess   = max(excess, 0); excess = stored = 0 while s_k = 0
-//                                                  absorbed energy is forgotten at once, everything
-//                                                  at a release
-//   e        = s_k / |s_k|, w = e . dq_db / T      the rate along the scene's effort, from the last
+//   excess   = max(excess, 0); excess = stored = 0 while s_k = 0 and no command with a scene
+//                                                  share is in flight: absorbed energy is forgotten at
+//                                                  once, everything at a release
+//   n        = s_k / |s_k|, w = n . dq_db / T      the rate along the scene's effort, from the last
 //                                                  period's displacement with a dead band of half a
 //                                                  sensor step per joint (no estimator lag)
-//   alpha    = min((excess - pending) / (T w^2), cap),  cap = m_e / (2 T (1 + d)), m_e = 1 / (e^T M^-1 e)
-//   u_k      = clamp(e_k - alpha w e, limits)
+//   alpha    = min((excess - pending) / (T w^2), cap),  cap = m_n / (2 T (1 + d)), m_n = 1 / (n^T M^-1 n)
+//   u_k      = clamp(e_k - alpha w n, limits)
 //
 // where pending is what the brakes already sent but not yet applied will dissipate at the current
 // rate, and the cap is scaled by the brakes' record: while the brakes applied over the last ten or so
 // periods have pushed with the motion more than against it (a displacement of one encoder count that
 // turns back next period looks like motion and is not), the cap shrinks by 10 % a period, and it
 // grows back while they dissipate. Within the limits the brake is shortened as a whole, so it stays
-// along e. Why these choices:
+// along n. Why these choices:
 // - Reference energy following (Ryu, Preusche, Hannaford and Hirzinger 2005) with the scene's
 //   stored energy estimated from its own effort along the path, so no scene needs to state it: for
 //   a sampled spring the increment is K |dq|^2 / 2 per period, the work Colgate and Brown's K T / 2
@@ -45,10 +45,10 @@
 //   (an application's negative damper) overdraws its store and is damped like the sampling's energy.
 // - The brake along the scene's share, not on every joint: J^T n has no null-space component, so the
 //   redundant devices' self-motion is not braked and their null-space control stays off the balance.
-// - The cap from the inertia m_e an effort along e meets (1 / (e^T M^-1 e): the rest of the
+// - The cap from the inertia m_n an effort along n meets (1 / (n^T M^-1 n): the rest of the
 //   mechanism, the null space included, gives way to it; at the tool it is the effective mass along
 //   the wall's normal): a damper on the last period's rate acting d periods later stays well damped
-//   on that inertia below m_e / (2 T (1 + d)) (the joint harness's cap); actuator limits bound it
+//   on that inertia below m_n / (2 T (1 + d)) (the joint harness's cap); actuator limits bound it
 //   further.
 // Limits: the reference is the scene's effort at the readings the policy got, so delay inside the
 // scene (an application thread computing forces from older positions) is not seen; displacements
@@ -120,10 +120,10 @@ class ScenePortPassivity {
     if (!(options.effort_limit.array() > 0.0).all()) fail("effort_limit must be > 0");
     if (options.inertia.size() != 0) {
       const Matrix& M = options.inertia;
-      Eigen::LLT<Matrix> llt;
-      if (M.rows() == dim && M.cols() == dim && M.allFinite() && M.isApprox(M.transpose())) llt.compute(M);
-      if (M.rows() != dim || M.cols() != dim || llt.info() != Eigen::Success)
-        fail("inertia must be a finite symmetric positive definite dim x dim matrix");
+      const char* what = "inertia must be a finite symmetric positive definite dim x dim matrix";
+      if (M.rows() != dim || M.cols() != dim || !M.allFinite() || !M.isApprox(M.transpose())) fail(what);
+      const Eigen::LLT<Matrix> llt(M);
+      if (llt.info() != Eigen::Success) fail(what);
       mobility_ = llt.solve(Matrix::Identity(dim, dim));
     }
     if (!std::isnan(options.max_damping) && !(std::isfinite(options.max_damping) && options.max_damping >= 0.0))
@@ -203,10 +203,8 @@ class ScenePortPassivity {
       }
     }
 
-    if (!options_.enabled) {
-      u_out = efforts;
-    } else {
-      u_out = efforts;
+    u_out = efforts;  // observing only: bit for bit
+    if (options_.enabled) {
       if (options_.effort_limit.size() != 0) {
         // The limits shorten the brake as a whole: clipped joint by joint it would turn away from
         // the scene's direction, and a damper turned off the rate it acts against can push.
