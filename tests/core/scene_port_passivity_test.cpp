@@ -198,7 +198,7 @@ TEST_CASE("scene port passivity: bad options and input are refused with a zero c
   o.max_damping = 1.0;
   ScenePortPassivity layer(o, 2);
   Vector u;
-  CHECK(layer.update(vec({0.0, NAN}), vec({1.0, 1.0}), vec({1.0, 1.0}), kT, u) == Fault::kNonFiniteInput);
+  CHECK(layer.update(vec({0.0, std::nan("")}), vec({1.0, 1.0}), vec({1.0, 1.0}), kT, u) == Fault::kNonFiniteInput);
   CHECK(u.isZero(0.0));
   CHECK(layer.update(vec({0.0, 0.0}), vec({1.0, 1.0}), vec({1.0, 1.0}), 0.0, u) == Fault::kInvalidParameter);
   CHECK(layer.update(vec({0.0}), vec({1.0, 1.0}), vec({1.0, 1.0}), kT, u) == Fault::kInvalidParameter);
