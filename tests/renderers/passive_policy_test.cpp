@@ -44,6 +44,7 @@ class JointWallPolicy final : public DevicePolicy {
     return fault;
   }
   void readingLost() noexcept override { ++lost; }
+  void commandApplied(int periods_ago) noexcept override { applied = periods_ago; }
   void ownEfforts(double* efforts) const noexcept override { efforts[0] += own; }
   bool actuatedInertia(double* matrix) const override {
     if (!(inertia > 0.0)) return false;
@@ -57,7 +58,7 @@ class JointWallPolicy final : public DevicePolicy {
   double own = 0.0;
   double inertia = 0.0;
   const double* override_effort = nullptr;
-  int resets = 0, lost = 0;
+  int resets = 0, lost = 0, applied = -1;
 
  private:
   int actuators_;
@@ -200,6 +201,9 @@ TEST_CASE("passive policy: observing only, the efforts are bit for bit the wrapp
   CHECK(figures.value("passivity_active_ticks") == 0.0);
   CHECK(layer.name() == "joint wall + passivity");
   CHECK(inner->resets == 1);
+  // The board's report of the command it applied reaches the wrapped policy (the TAU's wall uses it).
+  layer.commandApplied(2);
+  CHECK(inner->applied == 2);
 }
 
 TEST_CASE("passive policy: a sampled wall above 2b/T goes active alone and is passive with the layer") {

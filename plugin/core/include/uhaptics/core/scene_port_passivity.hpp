@@ -263,9 +263,6 @@ class ScenePortPassivity {
     active_ticks_ = faults_ = 0;
   }
 
-  void setEnabled(bool enabled) noexcept { options_.enabled = enabled; }
-  const Options& options() const noexcept { return options_; }
-  Eigen::Index dim() const noexcept { return dim_; }
   /// Net work the scene's port (its share plus the layer's damping, as applied) did on the user [J].
   double bookedWork() const noexcept { return booked_; }
   /// Energy the port generated against the continuous-time scene (and any the scene gave beyond its
