@@ -32,6 +32,11 @@ uhaptics::FmeControllerOptions<2> optionsFrom(const uhaptics::DeviceSelection& s
   o.max_null_space_torque = s.option("max_null_space_torque", o.max_null_space_torque, 0.01, 10.0);
   o.null_space_ramp_time = s.option("null_space_ramp_time", o.null_space_ramp_time, 0.0, 10.0);
   o.stiff_direction_time = s.option("stiff_direction_time", o.stiff_direction_time, 0.0, 1.0);
+  // The null-space torque's energy tank, in mJ and mW (0 capacity: no tank).
+  const double tank = s.option("null_space_tank", std::isfinite(o.null_space_tank_capacity) ? 1e3 * o.null_space_tank_capacity : 0.0,
+                               0.0, 1e5);
+  o.null_space_tank_capacity = tank > 0.0 ? 1e-3 * tank : std::numeric_limits<double>::infinity();
+  o.null_space_tank_refill = 1e-3 * s.option("null_space_tank_refill", 1e3 * o.null_space_tank_refill, 0.0, 1e5);
   return o;
 }
 

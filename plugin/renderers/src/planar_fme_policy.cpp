@@ -12,6 +12,7 @@ PlanarFmePolicy<N>::PlanarFmePolicy(Model model, const typename Controller::Opti
   fig_stiff_ticks_ = figures_.declareFigure("stiff_ticks", FigureKind::kCount);
   fig_force_scale_reduction_ = figures_.declareFigure("max_force_scale_reduction", FigureKind::kMaximum);
   fig_null_space_torque_ = figures_.declareFigure("max_null_space_torque_Nm", FigureKind::kMaximum);
+  fig_tank_drawn_ = figures_.declareFigure("null_space_tank_drawn_mJ", FigureKind::kMaximum);
 }
 
 template <int N>
@@ -54,6 +55,8 @@ void PlanarFmePolicy<N>::recordFigures(const typename Controller::Status& status
   if (status.omega < 1.0) figures_.count(fig_stiff_ticks_);  // any share of the stiff ellipsoid, blends included
   figures_.observeMaximum(fig_force_scale_reduction_, 1.0 - status.alpha);
   figures_.observeMaximum(fig_null_space_torque_, status.tau_null.norm());
+  const double capacity = controller_->options().null_space_tank_capacity;
+  if (std::isfinite(capacity)) figures_.observeMaximum(fig_tank_drawn_, 1e3 * (capacity - status.null_space_tank));
 }
 
 template class PlanarFmePolicy<3>;

@@ -40,7 +40,10 @@ class cPlanarLinkageDevice : public cUhapticsDevice {
   ///   null_space_ramp_time 0.25 [s]   rise time of the null-space torque after open(), in [0, 10]
   ///   stiff_direction_time 0.02 [s]   time constant of the stiff ellipsoid's axis following the
   ///                                   contact force's direction, in [0, 1] (0: each tick's force)
-  /// The last three are this device's, not paper 003's. The secondary task's torque (FME gradient,
+  ///   null_space_tank 0 [mJ], null_space_tank_refill 0 [mW]   energy tank of the null-space
+  ///                                   torque (0 capacity: none): over any T seconds the self-motion
+  ///                                   control gives the arm and the hand at most tank + refill T net
+  /// The three before the tank are this device's, not paper 003's. The secondary task's torque (FME gradient,
   /// damping, joint-limit barrier and brake) is scaled as a whole vector, direction kept, to a norm
   /// of at most max_null_space_torque, and after open() (or a fault that dropped it) it rises from
   /// zero as a half cosine over null_space_ramp_time: |tau_N| <= r(t) max_null_space_torque, and
@@ -50,7 +53,9 @@ class cPlanarLinkageDevice : public cUhapticsDevice {
   /// configuration asks for more than its actuators' limits, which an empty scene would get at its
   /// first tick; the bound also caps the joint-limit terms. The axis filter keeps a CHAI3D proxy
   /// force's tick-to-tick turns, which the stiff ellipsoid's elongated axes amplify, out of the
-  /// null-space torque. Figures: docs/rhi.md, "In CHAI3D".
+  /// null-space torque. The tank, off unless set, bounds the energy the self-motion control gives
+  /// the user (a desired ellipsoid that switches or turns sends the arm along its self-motion
+  /// manifold, work only friction takes out) without damping the tool. Figures: docs/rhi.md, "In CHAI3D".
   /// Throws uhaptics::Error when an option is out of range (naming it) or the set is inconsistent.
   /// a_model: the device's model; a_title: its name in the CHAI3D specification; a_workspaceRadius:
   /// the default of the workspace_radius option [m], a disc around home well inside the reach.

@@ -101,6 +101,17 @@ struct FmeControllerOptions {
   // controller; the CHAI3D device sets its own (CPlanarLinkageDevice.hpp).
   double max_null_space_torque = std::numeric_limits<double>::infinity();  // [N m], > 0
   double null_space_ramp_time = 0.0;                                       // [s], >= 0 (0: no ramp)
+  // Energy tank of the null-space torque (Ferraguti, Secchi et al.; Franken et al.'s two-layer
+  // approach): the tank E starts full at null_space_tank_capacity after reset(), pays the work the
+  // applied null-space torque did on the device over each period, tau_N(k-1)^T (q(k) - q(k-1))
+  // (its own damping's negative work refills it), gains null_space_tank_refill dt, and never holds
+  // more than its capacity. Below a quarter of the capacity the null-space torque is scaled by
+  // E / (capacity / 4), so the torque fades smoothly as the tank empties instead of stepping. Over
+  // any interval of length T the self-motion control gives the device (and the hand holding it) at
+  // most capacity + refill T net, whatever the desired ellipsoid does; the null-space torque keeps
+  // its direction. The primary task is not affected. Defaults: no tank (the paper's controller).
+  double null_space_tank_capacity = std::numeric_limits<double>::infinity();  // [J], > 0 (inf: no tank)
+  double null_space_tank_refill = 0.0;                                         // [W], >= 0
 };
 
 /// What one tick computed (for logging and figures).
@@ -115,6 +126,8 @@ struct FmeControllerStatus {
   double null_space_scale = 1.0;  // fraction of the FME null-space torque kept to stay within the torque limits
   double null_space_ramp = 1.0;   // start-up ramp r in [0, 1] (Options::null_space_ramp_time)
   double null_space_bound_scale = 1.0;  // min(1, max_null_space_torque / |tau_null_command|)
+  double null_space_tank = std::numeric_limits<double>::infinity();  // tank energy E [J] (inf: no tank)
+  double null_space_tank_scale = 1.0;   // the tank's scale of the null-space torque, in [0, 1]
   bool skipped_contact_work = false;  // free-motion fast path taken
   Vec<kTask> force = Vec<kTask>::Zero();  // force actually commanded (alpha F)
   Vec<kJoints> tau_primary = Vec<kJoints>::Zero();
@@ -156,7 +169,9 @@ class FmeNullSpaceController {
                     std::isfinite(o.limit_speed) && o.limit_speed >= 0.0 && std::isfinite(o.limit_brake_time) &&
                     o.limit_brake_time > 0.0 && o.max_null_space_torque > 0.0 &&
                     std::isfinite(o.null_space_ramp_time) && o.null_space_ramp_time >= 0.0 &&
-                    std::isfinite(o.stiff_direction_time) && o.stiff_direction_time >= 0.0;
+                    std::isfinite(o.stiff_direction_time) && o.stiff_direction_time >= 0.0 &&
+                    o.null_space_tank_capacity > 0.0 && std::isfinite(o.null_space_tank_refill) &&
+                    o.null_space_tank_refill >= 0.0;
     if (!ok) return Fault::kInvalidParameter;
     const fme::EllipsoidScales s = fme::ellipsoidScales(home_fme_, o.mu);
     const double major = o.major_axis > 0.0 ? o.major_axis : s.major;
@@ -199,6 +214,8 @@ class FmeNullSpaceController {
     status_ = Status{};
     status_.omega = status_.omega_target = transition_.omega();
     ramp_start_ = kNever;
+    status_.null_space_tank = options_.null_space_tank_capacity;
+    tank_time_ = kNever;
   }
 
   /// One servo tick at time t [s]: joint state q [rad] and q_dot [rad/s], requested end-effector
@@ -244,6 +261,25 @@ class FmeNullSpaceController {
     const double s = (t - ramp_start_) / options_.null_space_ramp_time;
     if (!(s < 1.0)) return 1.0;
     return 0.5 * (1.0 - std::cos(M_PI * std::max(s, 0.0)));
+  }
+
+  // Pays the work the null-space torque applied last period did on the way to q, adds the refill,
+  // and returns the tank's scale for this period (Options::null_space_tank_capacity).
+  double bookTank(double t, const JointVector& q) noexcept {
+    const double capacity = options_.null_space_tank_capacity;
+    if (!std::isfinite(capacity)) {
+      status_.null_space_tank = capacity;
+      return 1.0;
+    }
+    double energy = std::min(status_.null_space_tank, capacity);  // the capacity may have shrunk
+    if (tank_time_ != kNever) {
+      energy -= status_.tau_null.dot(q - tank_q_);
+      energy += options_.null_space_tank_refill * std::max(0.0, t - tank_time_);
+    }
+    status_.null_space_tank = std::min(energy, capacity);
+    tank_q_ = q;
+    tank_time_ = t;
+    return std::clamp(status_.null_space_tank / (kTankLowShare * capacity), 0.0, 1.0);
   }
 
   // Largest gamma in [0, 1] with |base_i + gamma add_i| <= T_i wherever add moves base outwards
@@ -332,6 +368,9 @@ class FmeNullSpaceController {
   static constexpr double kNever = -std::numeric_limits<double>::infinity();  // a time not yet set
   double ramp_start_ = kNever;  // time of the ramp's first tick
   double direction_time_ = kNever;  // time of the last contact-direction update
+  double tank_time_ = kNever;       // time of the tank's last booking
+  JointVector tank_q_ = JointVector::Zero();  // the joints at that booking
+  static constexpr double kTankLowShare = 0.25;  // the null-space torque fades below this share of the tank
   // Workspace (preallocated: the tick touches no heap).
   Mat<M, N> J_;
   JointVector grad_ = JointVector::Zero(), limit_grad_ = JointVector::Zero();
@@ -356,7 +395,8 @@ FmeNullSpaceController<Model>::FmeNullSpaceController(const Model& model, const 
   if (setOptions(options) != Fault::kNone)
     throw Error("FME controller: invalid options (gains must be finite and >= 0, mu > 0, thresholds in "
                 "[0, 1] with eps1 <= eps2, a non-zero motion direction, max_null_space_torque > 0, "
-                "null_space_ramp_time and stiff_direction_time finite and >= 0)");
+                "null_space_ramp_time and stiff_direction_time finite and >= 0, null_space_tank_capacity > 0, "
+                "null_space_tank_refill finite and >= 0)");
   reset();
 }
 
@@ -367,6 +407,8 @@ Fault FmeNullSpaceController<Model>::tick(double t, const JointVector& q, const 
   status_.skipped_contact_work = false;
   if (!std::isfinite(t) || !q.allFinite() || !qd.allFinite() || !F.allFinite())
     return finish(Fault::kNonFiniteInput, tau, false);
+  // The tank books last period's work first: a tick that drops the null space still paid for it.
+  status_.null_space_tank_scale = bookTank(t, q);
   model_.jacobian(q, J_);
   if (!J_.allFinite()) return finish(Fault::kNonFiniteResult, tau, false);
 
@@ -444,7 +486,8 @@ Fault FmeNullSpaceController<Model>::tick(double t, const JointVector& q, const 
   const double command_norm = status_.tau_null_command.norm();
   status_.null_space_bound_scale =
       command_norm > options_.max_null_space_torque ? options_.max_null_space_torque / command_norm : 1.0;
-  status_.tau_null = (status_.null_space_ramp * status_.null_space_bound_scale) * status_.tau_null_command;
+  status_.tau_null = (status_.null_space_ramp * status_.null_space_bound_scale * status_.null_space_tank_scale) *
+                     status_.tau_null_command;
   const double gamma = fitIntoLimits(tau, status_.tau_null);
   status_.tau_null *= gamma;
   tau += status_.tau_null;

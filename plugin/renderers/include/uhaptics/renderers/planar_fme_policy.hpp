@@ -23,6 +23,8 @@
 //   max_force_scale_reduction  maximum of 1 - alpha, the uniform force scaling before an actuator
 //                              saturates (0: the force was never scaled)
 //   max_null_space_torque_Nm   maximum Euclidean norm of the applied null-space torque [N m]
+//   null_space_tank_drawn_mJ   the most the null-space torque's energy tank was drawn below its
+//                              capacity [mJ] (0 without a tank)
 #include <memory>
 
 #include "uhaptics/models/planar_linkage_model.hpp"
@@ -96,7 +98,8 @@ class PlanarFmePolicy final : public DevicePolicy {
   typename Model::JointVector tau_ = Model::JointVector::Zero();
   typename Model::JointVector q_ = Model::JointVector::Zero();   // the latest joint reading
   typename Model::JointVector qd_ = Model::JointVector::Zero();  // its rates
-  int fig_free_to_stiff_, fig_stiff_to_free_, fig_stiff_ticks_, fig_force_scale_reduction_, fig_null_space_torque_;
+  int fig_free_to_stiff_, fig_stiff_to_free_, fig_stiff_ticks_, fig_force_scale_reduction_, fig_null_space_torque_,
+      fig_tank_drawn_;
   bool stiff_target_ = false;  // the last period headed for the stiff ellipsoid
 };
 
