@@ -314,6 +314,79 @@ TEST_CASE("passive device: non-finite commands or samples send zero and count a 
   CHECK_THROWS_AS(cPassiveHapticDevice::create(nullptr), uhaptics::Error);
 }
 
+// The decorator as the Z-width harness measures a layer at the tool: the lock-step device (0.2 kg,
+// b = 2 N s/m: Colgate and Brown's bound 2 b / T = 4000 N/m at 1 kHz) pressed into an application's
+// sampled spring wall of stiffness K by a hand pushing with 8 N (a person's firm push) from rest at
+// the surface, held for 2 s, then released. From the device's truth: the net work the commands did
+// on it, the spread of its position over the hold's last second (a ring) and the rendered stiffness
+// (hand force over the mean penetration there).
+struct HoldRun {
+  double peak_generated = 0.0;  // [J] the largest net work of the commands on the device so far
+  double ring = 0.0;            // [m] max - min position over the hold's last second
+  double rendered = 0.0;        // [N/m]
+  unsigned long long active = 0;
+};
+
+HoldRun holdWall(double stiffness, bool decorated) {
+  constexpr double kPush = 8.0;  // [N]
+  auto device = std::make_shared<cLockStepTestDevice>();
+  cGenericHapticDevicePtr used = device;
+  cPassiveHapticDevicePtr passive;
+  if (decorated) {
+    passive = cPassiveHapticDevice::create(device);
+    passive->setServoPeriod(kT);
+    used = passive;
+  }
+  REQUIRE(used->open());
+  HoldRun run;
+  double lo = std::numeric_limits<double>::infinity(), hi = -lo, sum = 0.0;
+  int n = 0;
+  for (int k = 0; k < 3000; ++k) {
+    device->m_handForce = k < 2000 ? kPush : 0.0;
+    cVector3d p;
+    used->getPosition(p);
+    const double x = p(0);
+    if (k >= 1000 && k < 2000) {
+      lo = std::min(lo, x);
+      hi = std::max(hi, x);
+      sum += x;
+      ++n;
+    }
+    used->setForceAndTorqueAndGripperForce(cVector3d(x > 0.0 ? -stiffness * x : 0.0, 0.0, 0.0), cVector3d(0, 0, 0), 0.0);
+  }
+  run.peak_generated = device->m_peakWork;
+  run.ring = hi - lo;
+  run.rendered = sum > 0.0 ? kPush / (sum / n) : 0.0;
+  if (passive) run.active = passive->getActiveCount();
+  return run;
+}
+
+TEST_CASE("passive device: measured like the Z-width harness, walls at 2x and 4.5x the device's bound stay put",
+          "[chai3d][passivity]") {
+  constexpr double kBound = 2.0 * cLockStepTestDevice::kFriction / kT;  // 4000 N/m
+  for (const double K : {2.0 * kBound, 4.5 * kBound}) {
+    const HoldRun bare = holdWall(K, false), on = holdWall(K, true);
+    INFO("K = " << K << " N/m; without the decorator: peak work " << 1e3 * bare.peak_generated << " mJ, ring "
+                << 1e3 * bare.ring << " mm; with it: " << 1e3 * on.peak_generated << " mJ, " << 1e3 * on.ring
+                << " mm, rendered " << on.rendered << " N/m");
+    // Without it the hold is a limit cycle: the tool bounces off the wall by 9.3 and 22 mm, the
+    // commands giving 0.66 and 1.8 J.
+    CHECK(bare.ring > 5e-3);
+    CHECK(bare.peak_generated > 0.1);
+    // With it the tool stays within 0.26 and 0.08 mm (the press goes 1 and 0.44 mm deep), the
+    // commands give at most 1.3 mJ, and the wall feels as stiff as asked (0.998 K). What is left is
+    // the whole-force observer's: the press stores F^2 / (2 K) on its balance (4 and 1.8 mJ), and a
+    // ring gives some of it back before the observer sees an excess.
+    CHECK(on.ring < 5e-4);
+    CHECK(on.peak_generated < 2e-3);
+    CHECK(on.rendered == Approx(K).epsilon(0.02));
+    CHECK(on.active > 0);
+  }
+  // Inside the bound the decorator leaves the wall's stiffness alone.
+  const HoldRun stable = holdWall(0.5 * kBound, true);
+  CHECK(stable.rendered == Approx(0.5 * kBound).epsilon(0.01));
+}
+
 TEST_CASE("passive device: a command allocates nothing", "[chai3d][passivity]") {
   auto device = std::make_shared<cLockStepTestDevice>();
   auto passive = cPassiveHapticDevice::create(device);
